@@ -1,0 +1,42 @@
+/// rmap-bench: benchmarks of rmap's engines against their anchors, side by side.
+#include <CLI/CLI.hpp>
+#include <exception>
+#include <iostream>
+
+#include "map3d/map3d_bench.h"
+
+int main(int argc, char** argv) {
+  CLI::App app{"rmap-bench: rmap against its anchors (OctoMap, ...) in one process; prints ratios, writes JSON"};
+  app.require_subcommand(1);
+
+  rmap::bench::Map3dBenchOptions map3d;
+  map3d.shared_data_dir = RMAP_SHARED_DATA_DIR;
+  CLI::App* m = app.add_subcommand("map3d", "cuboid occupancy map vs OctoMap 1.9");
+  m->add_option("--scans", map3d.source,
+                "scan.dat-style cloud (.bz2/.gz ok), 3DTK uos folder, sim:geb079 or sim:building")
+      ->required();
+  m->add_option("--resolution", map3d.resolution_m, "base cell edge, metres")->check(CLI::PositiveNumber);
+  m->add_option("--fusion-tolerance", map3d.fusion_tolerance, "log-odds span fused into one cuboid (default: library)")
+      ->check(CLI::NonNegativeNumber);
+  m->add_option("--fuse-after-scans", map3d.fuse_after_scans, "fuse blocks untouched for this many scans")
+      ->check(CLI::NonNegativeNumber);
+  m->add_option("--threads", map3d.threads, "threads for both maps")->check(CLI::Range(1, 64));
+  m->add_option("--max-range", map3d.max_range_m, "metres; rays beyond are truncated (default unlimited)");
+  m->add_option("--sensor-model", map3d.sensor_models, "beam, endpoint or both")
+      ->check(CLI::IsMember({"beam", "endpoint", "both"}));
+  m->add_option("--json", map3d.json_out, "write results as JSON to this file");
+  m->add_option("--shared-data", map3d.shared_data_dir, "folder of the shared datasets (for sim:geb079)");
+  m->add_option("--sim-poses", map3d.sim.poses, "simulated trajectory length")->check(CLI::Range(1, 100000));
+  m->add_option("--sim-rings", map3d.sim.rings, "simulated lidar rings")->check(CLI::Range(1, 1024));
+  m->add_option("--sim-columns", map3d.sim.columns, "simulated lidar columns")->check(CLI::Range(1, 16384));
+  m->add_option("--sim-seed", map3d.sim.seed, "simulation seed");
+
+  CLI11_PARSE(app, argc, argv);
+  try {
+    if (m->parsed()) return rmap::bench::runMap3dBench(map3d);
+  } catch (const std::exception& e) {
+    std::cerr << "rmap-bench: " << e.what() << std::endl;
+    return 1;
+  }
+  return 0;
+}

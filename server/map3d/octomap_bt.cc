@@ -1,0 +1,276 @@
+#include "map3d/octomap_bt.h"
+
+#include <algorithm>
+#include <array>
+#include <charconv>
+#include <cmath>
+#include <cstdint>
+#include <stdexcept>
+#include <system_error>
+
+namespace rmap::map3d {
+namespace {
+
+// OctoMap compares only this prefix of the first line (AbstractOccupancyOcTree::readBinary).
+constexpr std::string_view kMagic = "# Octomap OcTree binary file";
+constexpr int kTreeDepth = 16;
+constexpr int32_t kKeyOffset = 32768;  // OctoMap key of cell index 0
+
+// 2-bit child codes as OctoMap's std::bitset puts them: child i of a byte
+// occupies bits 2i (set for free and inner) and 2i+1 (set for occupied and inner).
+constexpr unsigned kFreeLeaf = 1;
+constexpr unsigned kOccupiedLeaf = 2;
+constexpr unsigned kInnerNode = 3;
+
+[[noreturn]] void fail(const std::string& what) { throw std::runtime_error("OctoMap .bt: " + what); }
+
+bool isSpace(char c) { return c == ' ' || c == '\t' || c == '\n' || c == '\r' || c == '\v' || c == '\f'; }
+
+/// Header reader mirroring AbstractOcTree::readHeader: whitespace-separated
+/// tokens, `#…` comments and unknown keywords skip the rest of their line,
+/// `data` ends the header after its line.
+class HeaderReader {
+ public:
+  explicit HeaderReader(std::string_view bytes) : bytes_(bytes) {}
+
+  /// Next whitespace-delimited token, empty at the end of the input.
+  std::string_view token() {
+    while (pos_ < bytes_.size() && isSpace(bytes_[pos_])) ++pos_;
+    const size_t start = pos_;
+    while (pos_ < bytes_.size() && !isSpace(bytes_[pos_])) ++pos_;
+    return bytes_.substr(start, pos_ - start);
+  }
+
+  void skipLine() {
+    const size_t nl = bytes_.find('\n', pos_);
+    pos_ = nl == std::string_view::npos ? bytes_.size() : nl + 1;
+  }
+
+  size_t position() const { return pos_; }
+
+ private:
+  std::string_view bytes_;
+  size_t pos_ = 0;
+};
+
+struct Header {
+  double resolution_m = 0.0;
+  uint64_t size = 0;
+  size_t data_offset = 0;
+};
+
+Header readHeader(std::string_view bytes) {
+  if (bytes.substr(0, kMagic.size()) != kMagic) {
+    fail("first line does not start with \"" + std::string(kMagic) + "\" (not an OcTree binary file)");
+  }
+  HeaderReader in(bytes);
+  in.skipLine();
+  std::string_view id;
+  bool have_res = false, have_size = false, have_data = false;
+  Header h;
+  while (!have_data) {
+    const std::string_view t = in.token();
+    if (t.empty()) fail("header ends before the \"data\" line");
+    if (t == "data") {
+      in.skipLine();
+      have_data = true;
+    } else if (t.front() == '#') {
+      in.skipLine();
+    } else if (t == "id") {
+      id = in.token();
+    } else if (t == "res") {
+      const std::string_view v = in.token();
+      const auto [end, ec] = std::from_chars(v.data(), v.data() + v.size(), h.resolution_m);
+      if (ec != std::errc() || end != v.data() + v.size()) fail("bad res value \"" + std::string(v) + "\"");
+      have_res = true;
+    } else if (t == "size") {
+      const std::string_view v = in.token();
+      const auto [end, ec] = std::from_chars(v.data(), v.data() + v.size(), h.size);
+      if (ec != std::errc() || end != v.data() + v.size()) fail("bad size value \"" + std::string(v) + "\"");
+      have_size = true;
+    } else {
+      in.skipLine();  // OctoMap warns about unknown keywords and skips them
+    }
+  }
+  // "1" is the deprecated id OctoMap still maps to OcTree.
+  if (id != "OcTree" && id != "1") {
+    fail(id.empty() ? "header has no id" : "unsupported tree id \"" + std::string(id) + "\" (only OcTree)");
+  }
+  if (!have_res) fail("header has no res");
+  if (!(h.resolution_m > 0.0) || !std::isfinite(h.resolution_m)) fail("res must be finite and > 0");
+  if (!have_size) fail("header has no size");
+  h.data_offset = in.position();
+  return h;
+}
+
+/// Depth-first reader of the node stream, the inverse of OctoMap's writeBinaryNode.
+class NodeReader {
+ public:
+  NodeReader(std::string_view data, std::vector<BtLeaf>& leaves) : data_(data), leaves_(leaves) {}
+
+  /// Reads the inner node at `depth` whose cube starts at OctoMap key `key`.
+  void readInner(int depth, const std::array<int32_t, 3>& key) {
+    if (pos_ + 2 > data_.size()) fail("truncated data at byte " + std::to_string(pos_) + " of the tree");
+    const unsigned codes = static_cast<uint8_t>(data_[pos_]) | (static_cast<unsigned>(static_cast<uint8_t>(data_[pos_ + 1])) << 8);
+    pos_ += 2;
+    ++nodes_;
+    const int child_depth = depth + 1;
+    const int32_t child_size = int32_t{1} << (kTreeDepth - child_depth);
+    // Leaves and subtrees interleaved in child order give depth-first (Morton) order.
+    for (int i = 0; i < 8; ++i) {
+      const unsigned code = (codes >> (2 * i)) & 3u;
+      if (code == 0) continue;
+      const std::array<int32_t, 3> child{key[0] + ((i & 1) ? child_size : 0), key[1] + ((i & 2) ? child_size : 0),
+                                         key[2] + ((i & 4) ? child_size : 0)};
+      if (code == kInnerNode) {
+        if (child_depth == kTreeDepth) {
+          fail("inner node below the deepest level (depth 16) at byte " + std::to_string(pos_ - 2));
+        }
+        readInner(child_depth, child);
+      } else {
+        ++nodes_;
+        leaves_.push_back({CellKey{child[0] - kKeyOffset, child[1] - kKeyOffset, child[2] - kKeyOffset}, child_size,
+                           code == kOccupiedLeaf});
+      }
+    }
+  }
+
+  size_t position() const { return pos_; }
+  uint64_t nodes() const { return nodes_; }
+
+ private:
+  std::string_view data_;
+  std::vector<BtLeaf>& leaves_;
+  size_t pos_ = 0;
+  uint64_t nodes_ = 0;
+};
+
+/// Spreads the low 16 bits of v to every third bit (bit b goes to bit 3b).
+uint64_t spreadBits3(uint64_t v) {
+  v &= 0xffff;
+  v = (v | (v << 16)) & 0x0000ff0000ffULL;
+  v = (v | (v << 8)) & 0x00f00f00f00fULL;
+  v = (v | (v << 4)) & 0x0c30c30c30c3ULL;
+  v = (v | (v << 2)) & 0x249249249249ULL;
+  return v;
+}
+
+/// Morton code of the OctoMap keys: the three bits of level d (from the top)
+/// are OctoMap's child index, x in the lowest bit.
+uint64_t mortonCode(const CellKey& c) {
+  return spreadBits3(static_cast<uint64_t>(c.x + kKeyOffset)) |
+         (spreadBits3(static_cast<uint64_t>(c.y + kKeyOffset)) << 1) |
+         (spreadBits3(static_cast<uint64_t>(c.z + kKeyOffset)) << 2);
+}
+
+/// Entries are (Morton code << 1) | occupied, sorted and unique by code.
+class NodeWriter {
+ public:
+  explicit NodeWriter(std::string& out) : out_(out) {}
+
+  /// Writes the subtree of the node at `depth` holding the entries [begin, end)
+  /// (non-empty) and returns its code in the parent. A node whose 8 children
+  /// are leaves of one state is pruned: its bytes are taken back and it
+  /// becomes a leaf. The root (depth 0) is always written.
+  unsigned write(const uint64_t* begin, const uint64_t* end, int depth) {
+    if (depth == kTreeDepth) return (*begin & 1u) ? kOccupiedLeaf : kFreeLeaf;
+    const size_t at = out_.size();
+    out_.append(2, '\0');
+    const int shift = 1 + 3 * (kTreeDepth - 1 - depth);
+    unsigned codes = 0;
+    const uint64_t* first = begin;
+    for (unsigned i = 0; i < 8 && first != end; ++i) {
+      const uint64_t* last = std::partition_point(first, end, [&](uint64_t e) { return ((e >> shift) & 7u) <= i; });
+      if (last != first) codes |= write(first, last, depth + 1) << (2 * i);
+      first = last;
+    }
+    if (depth > 0 && (codes == 0x5555u || codes == 0xaaaau)) {  // all free or all occupied leaves
+      out_.resize(at);
+      return codes & 3u;
+    }
+    out_[at] = static_cast<char>(codes & 0xffu);
+    out_[at + 1] = static_cast<char>(codes >> 8);
+    return kInnerNode;
+  }
+
+ private:
+  std::string& out_;
+};
+
+/// Nodes in a written stream: the root plus every non-empty child code.
+uint64_t countNodes(std::string_view data) {
+  uint64_t n = data.empty() ? 0 : 1;
+  for (char c : data) {
+    for (int i = 0; i < 4; ++i) n += ((static_cast<uint8_t>(c) >> (2 * i)) & 3u) != 0;
+  }
+  return n;
+}
+
+}  // namespace
+
+BtTree parseBt(std::string_view bytes) {
+  const Header header = readHeader(bytes);
+  BtTree tree;
+  tree.resolution_m = header.resolution_m;
+  const std::string_view data = bytes.substr(header.data_offset);
+  if (header.size == 0) {
+    // OctoMap writes an empty tree as "size 0" and no data at all.
+    if (!data.empty()) fail(std::to_string(data.size()) + " bytes of data after a header with size 0");
+    return tree;
+  }
+  NodeReader reader(data, tree.leaves);
+  reader.readInner(0, {0, 0, 0});
+  if (reader.position() != data.size()) {
+    fail(std::to_string(data.size() - reader.position()) + " trailing bytes after the tree");
+  }
+  if (reader.nodes() != header.size) {
+    fail("tree has " + std::to_string(reader.nodes()) + " nodes but the header says size " +
+         std::to_string(header.size));
+  }
+  return tree;
+}
+
+std::string writeBt(double resolution_m, std::vector<BtCell> cells) {
+  if (!(resolution_m > 0.0) || !std::isfinite(resolution_m)) {
+    throw std::invalid_argument("writeBt: resolution must be finite and > 0, got " + std::to_string(resolution_m));
+  }
+  std::vector<uint64_t> entries;
+  entries.reserve(cells.size());
+  for (const BtCell& c : cells) {
+    if (!cellInRange(c.cell)) {
+      throw std::invalid_argument("writeBt: cell (" + std::to_string(c.cell.x) + ", " + std::to_string(c.cell.y) +
+                                  ", " + std::to_string(c.cell.z) + ") is outside [-32768, 32768)");
+    }
+    entries.push_back((mortonCode(c.cell) << 1) | (c.occupied ? 1u : 0u));
+  }
+  cells = {};  // release the input before sorting
+  // Stable by code so that among duplicates the last input stays last and wins.
+  std::stable_sort(entries.begin(), entries.end(), [](uint64_t a, uint64_t b) { return (a >> 1) < (b >> 1); });
+  size_t n = 0;
+  for (size_t i = 0; i < entries.size(); ++i) {
+    if (n > 0 && (entries[n - 1] >> 1) == (entries[i] >> 1)) {
+      entries[n - 1] = entries[i];
+    } else {
+      entries[n++] = entries[i];
+    }
+  }
+  entries.resize(n);
+
+  std::string data;
+  if (!entries.empty()) NodeWriter(data).write(entries.data(), entries.data() + entries.size(), 0);
+
+  char res[32];  // holds any double in shortest round-trip form
+  char* res_end = std::to_chars(res, res + sizeof res, resolution_m).ptr;
+  std::string out;
+  out.reserve(data.size() + 160);
+  out += kMagic;
+  out += "\n# (feel free to add / change comments, but leave the first line as it is!)\n#\nid OcTree\nsize ";
+  out += std::to_string(countNodes(data));
+  out += "\nres ";
+  out.append(res, res_end);
+  out += "\ndata\n";
+  out += data;
+  return out;
+}
+
+}  // namespace rmap::map3d

@@ -1,0 +1,75 @@
+#include "map3d/scan_update.h"
+
+#include "map3d/ray_traversal.h"
+
+namespace rmap::map3d {
+
+BlockMarks& ScanUpdate::marksOf(const BlockKey& key) {
+  // consecutive cells of a ray mostly share a block: skip the hash lookup then
+  if (key == last_key_) return blocks_[last_slot_];
+  auto [it, inserted] = index_.try_emplace(key, static_cast<uint32_t>(blocks_.size()));
+  if (inserted) {
+    blocks_.emplace_back();
+    blocks_.back().key = key;
+  }
+  last_key_ = key;
+  last_slot_ = it->second;
+  return blocks_[last_slot_];
+}
+
+void ScanUpdate::gather(const Grid& grid, const OccupancyParams& params, const Eigen::Vector3f& sensor_origin_m,
+                        std::span<const Eigen::Vector3f> points_m) {
+  const bool beam = params.sensor_model == SensorModel::kBeam;
+  auto free = [this](const CellKey& c) { markFree(c); };
+  for (const Eigen::Vector3f& p : points_m) {
+    ++stats_.points;
+    CellKey end;
+    if (!grid.cellChecked(p, end)) {
+      ++stats_.rejected_points;
+      continue;
+    }
+    if (params.max_range_m >= 0.0) {
+      const Eigen::Vector3f d = p - sensor_origin_m;
+      const double range = std::sqrt(static_cast<double>(d.x() * d.x() + d.y() * d.y() + d.z() * d.z()));
+      if (range > params.max_range_m) {
+        ++stats_.max_range_rays;
+        if (beam) {
+          const Eigen::Vector3f dir = d / static_cast<float>(range);
+          const Eigen::Vector3f truncated = sensor_origin_m + dir * static_cast<float>(params.max_range_m);
+          traverseFreeCells(grid, sensor_origin_m, truncated, free);
+        }
+        continue;
+      }
+    }
+    if (beam) traverseFreeCells(grid, sensor_origin_m, p, free);
+    markOccupied(end);
+  }
+}
+
+void ScanUpdate::merge(ScanUpdate&& other) {
+  if (blocks_.empty()) {
+    *this = std::move(other);
+    return;
+  }
+  for (BlockMarks& m : other.blocks_) {
+    BlockMarks& mine = marksOf(m.key);
+    for (int w = 0; w < kBlockWords; ++w) {
+      mine.free.words[w] |= m.free.words[w];
+      mine.occupied.words[w] |= m.occupied.words[w];
+    }
+  }
+  stats_.points += other.stats_.points;
+  stats_.rejected_points += other.stats_.rejected_points;
+  stats_.max_range_rays += other.stats_.max_range_rays;
+}
+
+void ScanUpdate::resolve() {
+  stats_.occupied_cells = stats_.free_cells = 0;
+  for (BlockMarks& m : blocks_) {
+    for (int w = 0; w < kBlockWords; ++w) m.free.words[w] &= ~m.occupied.words[w];
+    stats_.occupied_cells += m.occupied.count();
+    stats_.free_cells += m.free.count();
+  }
+}
+
+}  // namespace rmap::map3d

@@ -1,0 +1,67 @@
+#include "map3d/scan_update.h"
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+namespace rmap::map3d {
+namespace {
+
+std::vector<Eigen::Vector3f> randomPoints(int n, uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> u(-8.0f, 8.0f);
+  std::vector<Eigen::Vector3f> points;
+  for (int i = 0; i < n; ++i) points.push_back({u(rng), u(rng), u(rng) * 0.3f});
+  return points;
+}
+
+TEST(ScanUpdate, MarksAreDisjointAfterResolve) {
+  const Grid grid(0.1);
+  ScanUpdate update;
+  update.gather(grid, OccupancyParams{}, {0.3f, 0.2f, 0.1f}, randomPoints(2000, 1));
+  update.resolve();
+  uint64_t occupied = 0;
+  for (const BlockMarks& m : update.blocks()) {
+    for (int w = 0; w < kBlockWords; ++w) EXPECT_EQ(m.free.words[w] & m.occupied.words[w], 0u);
+    occupied += m.occupied.count();
+  }
+  EXPECT_EQ(occupied, update.stats().occupied_cells);
+  EXPECT_GT(update.stats().free_cells, update.stats().occupied_cells);
+}
+
+TEST(ScanUpdate, MergedPartsEqualOneGather) {
+  const Grid grid(0.05);
+  const auto points = randomPoints(5000, 2);
+  const Eigen::Vector3f origin(0.0f, 0.0f, 0.5f);
+  ScanUpdate whole;
+  whole.gather(grid, OccupancyParams{}, origin, points);
+  whole.resolve();
+  ScanUpdate a, b;
+  a.gather(grid, OccupancyParams{}, origin, std::span(points).first(1234));
+  b.gather(grid, OccupancyParams{}, origin, std::span(points).subspan(1234));
+  a.merge(std::move(b));
+  a.resolve();
+  EXPECT_EQ(a.stats().points, whole.stats().points);
+  EXPECT_EQ(a.stats().occupied_cells, whole.stats().occupied_cells);
+  EXPECT_EQ(a.stats().free_cells, whole.stats().free_cells);
+  ASSERT_EQ(a.blocks().size(), whole.blocks().size());
+}
+
+TEST(ScanUpdate, CountsRejectedPointsAndTruncatedRays) {
+  const Grid grid(0.5);
+  OccupancyParams params;
+  params.max_range_m = 2.25;
+  ScanUpdate update;
+  const std::vector<Eigen::Vector3f> points = {{1.25f, 0, 0}, {5, 0, 0}, {NAN, 0, 0}, {1e7f, 0, 0}};
+  update.gather(grid, params, {0.1f, 0, 0}, points);
+  update.resolve();
+  EXPECT_EQ(update.stats().points, 4u);
+  EXPECT_EQ(update.stats().rejected_points, 2u);
+  EXPECT_EQ(update.stats().max_range_rays, 1u);
+  EXPECT_EQ(update.stats().occupied_cells, 1u);
+  // free: cells 0, 1 and 3 (up to the truncated end in cell 4); cell 2 holds the endpoint
+  EXPECT_EQ(update.stats().free_cells, 3u);
+}
+
+}  // namespace
+}  // namespace rmap::map3d
