@@ -137,7 +137,7 @@ CuboidMap::Block& CuboidMap::blockForWrite(const BlockKey& key) {
 }
 
 void CuboidMap::expand(Block& block) {
-  block.dense = std::make_unique<DenseCells>();
+  block.dense.reset(new DenseCells);  // default-init: only the known bits are zeroed, values are written before use
   expandCuboids(block.cuboids, *block.dense);
   block.cuboids.clear();
   block.cuboids.shrink_to_fit();

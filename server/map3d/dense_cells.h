@@ -44,7 +44,7 @@ struct BlockBits {
 };
 
 struct DenseCells {
-  std::array<float, kBlockCells> log_odds;  ///< meaningful where `known` is set
+  std::array<float, kBlockCells> log_odds;  ///< meaningful where `known` is set; left uninitialised otherwise
   BlockBits known;
 };
 

@@ -111,7 +111,9 @@ class NodeReader {
   /// Reads the inner node at `depth` whose cube starts at OctoMap key `key`.
   void readInner(int depth, const std::array<int32_t, 3>& key) {
     if (pos_ + 2 > data_.size()) fail("truncated data at byte " + std::to_string(pos_) + " of the tree");
-    const unsigned codes = static_cast<uint8_t>(data_[pos_]) | (static_cast<unsigned>(static_cast<uint8_t>(data_[pos_ + 1])) << 8);
+    // Byte 1 holds children 0-3, byte 2 children 4-7, two bits each from the lowest.
+    const unsigned codes = static_cast<unsigned>(static_cast<uint8_t>(data_[pos_])) |
+                           (static_cast<unsigned>(static_cast<uint8_t>(data_[pos_ + 1])) << 8);
     pos_ += 2;
     ++nodes_;
     const int child_depth = depth + 1;

@@ -4,9 +4,7 @@
 
 namespace rmap::map3d {
 
-BlockMarks& ScanUpdate::marksOf(const BlockKey& key) {
-  // consecutive cells of a ray mostly share a block: skip the hash lookup then
-  if (key == last_key_) return blocks_[last_slot_];
+BlockMarks& ScanUpdate::lookUp(const BlockKey& key) {
   auto [it, inserted] = index_.try_emplace(key, static_cast<uint32_t>(blocks_.size()));
   if (inserted) {
     blocks_.emplace_back();

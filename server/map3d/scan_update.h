@@ -50,7 +50,13 @@ class ScanUpdate {
   ScanStats& stats() { return stats_; }
 
  private:
-  BlockMarks& marksOf(const BlockKey& key);
+  /// Consecutive cells of a ray mostly share a block: the hash lookup runs
+  /// only when the block changes.
+  BlockMarks& marksOf(const BlockKey& key) {
+    if (key == last_key_) return blocks_[last_slot_];
+    return lookUp(key);
+  }
+  BlockMarks& lookUp(const BlockKey& key);
   void markFree(const CellKey& c) { marksOf(blockOf(c)).free.set(localIndex(c)); }
   void markOccupied(const CellKey& c) { marksOf(blockOf(c)).occupied.set(localIndex(c)); }
 

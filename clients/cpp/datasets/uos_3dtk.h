@@ -29,7 +29,7 @@ inline constexpr double kUosMinRangeCm = 48.0;
 /// and the few readings between 3000 cm and there are stray.
 inline constexpr double kUosMaxRangeCm = 3000.0;
 
-/// Counts over all scans read.
+/// Counts over all scans of one readUos3dtk call (reset at its start).
 struct UosReadStats {
   size_t points_read = 0;         ///< point lines in the .3d files
   size_t dropped_near = 0;        ///< range < kUosMinRangeCm

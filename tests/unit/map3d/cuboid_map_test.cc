@@ -313,7 +313,9 @@ TEST(CuboidMap, ReadersRunWhileOneWriterInserts) {
     readers.emplace_back([&] {
       while (!done) {
         const CellQuery q = map.query({5.99, 2.5, 1.5});
-        if (q.state != CellState::kUnknown) EXPECT_TRUE(std::isfinite(q.log_odds));
+        if (q.state != CellState::kUnknown) {
+          EXPECT_TRUE(std::isfinite(q.log_odds));
+        }
         map.queryBox(Eigen::AlignedBox3d(Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(6, 5, 3)), 50);
         map.castRay({3, 2.5, 1.5}, {1, 0.2, 0}, 10, true);
         reads += 3;
