@@ -109,10 +109,12 @@ template <class StateFn>
 double crossValidationAccuracy(const std::vector<datasets::PointScan>& held_out, const map3d::Grid& grid,
                                const map3d::OccupancyParams& params, StateFn&& state_of) {
   uint64_t total = 0, correct = 0;
+  map3d::OccupancyParams exact = params;  // the protocol's cells are OctoMap's
+  exact.free_space_tracing = map3d::FreeSpaceTracing::kOctomapExact;
   for (const datasets::PointScan& s : held_out) {
     if (s.points_m.empty()) continue;
     map3d::ScanUpdate update;
-    update.gather(grid, params, s.sensor_origin_m, s.points_m);
+    update.gather(grid, exact, s.sensor_origin_m, s.points_m);
     update.resolve();
     for (const map3d::BlockMarks& m : update.blocks()) {
       m.occupied.forEach([&](int i) {
@@ -165,11 +167,17 @@ json compareOnce(const BenchDataset& data, const Map3dBenchOptions& o, const map
   std::cerr << "  agreement ..." << std::endl;
   out["agreement"] = agreement(*rmap.map, *octo.tree);
   {
-    map3d::FusionParams exact = fusion;
-    exact.tolerance_log_odds = 0.0f;
-    RmapRun zero = runRmap(data.scans, o.resolution_m, occupancy, exact, o.threads);
-    out["agreement_tolerance_0"] = agreement(*zero.map, *octo.tree);
-    out["cuboids_tolerance_0"] = zero.map->stats().cuboids;
+    // fusion off: tolerance 0 and OctoMap's own ray walks, which must equal OctoMap cell for cell
+    map3d::FusionParams no_fusion = fusion;
+    no_fusion.tolerance_log_odds = 0.0f;
+    map3d::OccupancyParams exact = occupancy;
+    exact.free_space_tracing = map3d::FreeSpaceTracing::kOctomapExact;
+    RmapRun off = runRmap(data.scans, o.resolution_m, exact, no_fusion, o.threads);
+    out["fusion_off"] = {{"insert_s", off.insert_s},
+                         {"speedup", octo.insert_s / off.insert_s},
+                         {"cuboids", off.map->stats().cuboids},
+                         {"memory_bytes", off.map->stats().memory_bytes},
+                         {"agreement", agreement(*off.map, *octo.tree)}};
   }
 
   std::cerr << "  cross-validation ..." << std::endl;
@@ -214,7 +222,8 @@ void printRow(const std::string& model, const json& r) {
             << " s, " << r["octomap"]["leaves"] << " leaves, " << r["octomap"]["memory_bytes"] << " B\n"
             << "  speedup " << r["speedup"].get<double>() << "  memory_ratio " << r["memory_ratio"].get<double>()
             << "  cuboid_ratio " << r["cuboid_ratio"].get<double>() << "  agreement " << r["agreement"].get<double>()
-            << " (tolerance 0: " << r["agreement_tolerance_0"].get<double>() << ")\n"
+            << "\n  fusion off (tolerance 0, exact walks): speedup " << r["fusion_off"]["speedup"].get<double>()
+            << "  agreement " << r["fusion_off"]["agreement"].get<double>() << "\n"
             << "  cv_accuracy rmap " << r["cv_accuracy"]["rmap"].get<double>() << " octomap "
             << r["cv_accuracy"]["octomap"].get<double>();
   if (!r["truth_accuracy"].is_null()) {

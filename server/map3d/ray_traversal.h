@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <type_traits>
 
 #include "map3d/cell_key.h"
 
@@ -47,6 +48,18 @@ class RayWalker {
     return true;
   }
 
+  /// The walker's variables, for loops that keep several rays in flight.
+  struct State {
+    CellKey cell;
+    int32_t step[3];
+    double t_max[3];
+    double t_delta[3];
+  };
+  State state() const {
+    return {current_, {step_[0], step_[1], step_[2]}, {t_max_[0], t_max_[1], t_max_[2]},
+            {t_delta_[0], t_delta_[1], t_delta_[2]}};
+  }
+
   const CellKey& cell() const { return current_; }
   const CellKey& endCell() const { return end_; }
   bool atEnd() const { return current_ == end_; }
@@ -77,20 +90,29 @@ class RayWalker {
 /// Calls `visit(const CellKey&)` for every cell the segment origin→end frees:
 /// the origin cell and each crossed cell, never the end cell. Same cells and
 /// order as OctoMap's computeRayKeys (which also stops early when rounding
-/// would step past the end cell).
+/// would step past the end cell). A visitor returning bool stops the walk by
+/// returning false.
 /// @return false when origin or end is not addressable; nothing is visited then
 template <class Visit>
 bool traverseFreeCells(const Grid& grid, const Eigen::Vector3f& origin_m, const Eigen::Vector3f& end_m, Visit&& visit) {
   RayWalker walker;
   if (!walker.init(grid, origin_m, end_m)) return false;
   if (walker.atEnd()) return true;
-  visit(walker.cell());
+  auto call = [&](const CellKey& c) {
+    if constexpr (std::is_same_v<decltype(visit(c)), bool>) {
+      return visit(c);
+    } else {
+      visit(c);
+      return true;
+    }
+  };
+  if (!call(walker.cell())) return true;
   const double length = walker.length();
   while (true) {
     walker.step();
     if (walker.atEnd()) break;
     if (walker.exitDistance() > length) break;
-    visit(walker.cell());
+    if (!call(walker.cell())) break;
   }
   return true;
 }

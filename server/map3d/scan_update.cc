@@ -1,5 +1,7 @@
 #include "map3d/scan_update.h"
 
+#include <algorithm>
+
 #include "map3d/ray_traversal.h"
 
 namespace rmap::map3d {
@@ -18,7 +20,45 @@ BlockMarks& ScanUpdate::lookUp(const BlockKey& key) {
 void ScanUpdate::gather(const Grid& grid, const OccupancyParams& params, const Eigen::Vector3f& sensor_origin_m,
                         std::span<const Eigen::Vector3f> points_m) {
   const bool beam = params.sensor_model == SensorModel::kBeam;
-  auto free = [this](const CellKey& c) { markFree(c); };
+  const bool exact = params.free_space_tracing == FreeSpaceTracing::kOctomapExact;
+  CellKey origin_cell;
+  if (!grid.cellChecked(sensor_origin_m, origin_cell)) {
+    stats_.points += points_m.size();
+    stats_.rejected_points += points_m.size();
+    return;
+  }
+  bool origin_freed = false;
+  const int stop_run = std::max(1, params.stop_after_freed_cells);
+  auto free = [&](const Eigen::Vector3f& end_m) {
+    if (exact) {
+      traverseFreeCells(grid, sensor_origin_m, end_m, [this](const CellKey& c) { markFree(c); });
+      return;
+    }
+    // Walk back from the end; the walk's first cell is the end cell itself, and
+    // it never reaches the sensor's cell, which is freed once below.
+    bool end_cell = true;
+    bool left_origin = false;
+    int freed_run = 0;
+    traverseFreeCells(grid, end_m, sensor_origin_m, [&](const CellKey& c) {
+      left_origin = true;
+      if (end_cell) {
+        end_cell = false;
+        return true;
+      }
+      BlockMarks& marks = marksOf(blockOf(c));
+      const int i = localIndex(c);
+      if (!marks.free.test(i)) {
+        marks.free.set(i);
+        freed_run = 0;
+        return true;
+      }
+      return ++freed_run < stop_run;
+    });
+    if (left_origin && !origin_freed) {
+      markFree(origin_cell);
+      origin_freed = true;
+    }
+  };
   for (const Eigen::Vector3f& p : points_m) {
     ++stats_.points;
     CellKey end;
@@ -34,12 +74,12 @@ void ScanUpdate::gather(const Grid& grid, const OccupancyParams& params, const E
         if (beam) {
           const Eigen::Vector3f dir = d / static_cast<float>(range);
           const Eigen::Vector3f truncated = sensor_origin_m + dir * static_cast<float>(params.max_range_m);
-          traverseFreeCells(grid, sensor_origin_m, truncated, free);
+          free(truncated);
         }
         continue;
       }
     }
-    if (beam) traverseFreeCells(grid, sensor_origin_m, p, free);
+    if (beam) free(p);
     markOccupied(end);
   }
 }

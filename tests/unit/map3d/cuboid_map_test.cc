@@ -70,9 +70,11 @@ void expectSameAsOctomap(const CuboidMap& map, const octomap::OcTree& tree, bool
 
 TEST(CuboidMap, ZeroToleranceEqualsOctomapCellForCell) {
   const auto scans = roomScans(6, 1);
+  OccupancyParams exact;
+  exact.free_space_tracing = FreeSpaceTracing::kOctomapExact;
   for (int fuse_after : {0, 2, 100}) {
     for (int threads : {1, 2}) {
-      CuboidMap map(0.1, {}, {0.0f, fuse_after});
+      CuboidMap map(0.1, exact, {0.0f, fuse_after});
       insertAll(map, scans, threads);
       octomap::OcTree tree(0.1);
       for (const Scan& s : scans) {
@@ -88,7 +90,10 @@ TEST(CuboidMap, ZeroToleranceEqualsOctomapCellForCell) {
 }
 
 TEST(CuboidMap, OccupiedWinsAndEachCellChangesOncePerScan) {
-  CuboidMap map(1.0, {}, {0.0f, 100});
+  for (FreeSpaceTracing tracing : {FreeSpaceTracing::kOctomapExact, FreeSpaceTracing::kStopAtFreed}) {
+  OccupancyParams params;
+  params.free_space_tracing = tracing;
+  CuboidMap map(1.0, params, {0.0f, 100});
   // the first ray ends in cell (2,0,0), which the second ray crosses; both cross (1,0,0)
   const std::vector<Eigen::Vector3f> points = {{2.5f, 0.5f, 0.5f}, {4.5f, 0.5f, 0.5f}};
   map.insertScan({0.5f, 0.5f, 0.5f}, points);
@@ -99,6 +104,27 @@ TEST(CuboidMap, OccupiedWinsAndEachCellChangesOncePerScan) {
   EXPECT_EQ(map.queryCell({3, 0, 0}).state, CellState::kFree);
   EXPECT_EQ(map.queryCell({4, 0, 0}).state, CellState::kOccupied);
   EXPECT_EQ(map.queryCell({5, 0, 0}).state, CellState::kUnknown);
+  EXPECT_EQ(map.queryCell({0, 0, 0}).log_odds, p.miss_log_odds);  // the sensor's cell, freed once
+  }
+}
+
+// Early-stopping walks free almost exactly the cells OctoMap frees.
+TEST(CuboidMap, StopAtFreedTracingStaysCloseToExact) {
+  const auto scans = roomScans(6, 2);
+  OccupancyParams exact_params;
+  exact_params.free_space_tracing = FreeSpaceTracing::kOctomapExact;
+  CuboidMap exact(0.05, exact_params, {0.0f, 100});
+  CuboidMap fast(0.05, {}, {0.0f, 100});
+  insertAll(exact, scans);
+  insertAll(fast, scans);
+  uint64_t cells = 0, same = 0;
+  exact.forEachKnownCell([&](const CellKey& c, float v) {
+    ++cells;
+    same += fast.queryCell(c).state == (v >= 0.0f ? CellState::kOccupied : CellState::kFree);
+  });
+  const uint64_t union_cells = cells + fast.stats().known_cells - same;  // every shared known cell agrees here
+  EXPECT_GE(static_cast<double>(same) / union_cells, 0.99);
+  EXPECT_EQ(fast.stats().occupied_cells, exact.stats().occupied_cells);
 }
 
 TEST(CuboidMap, ClampsLogOdds) {

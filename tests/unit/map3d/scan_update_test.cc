@@ -33,12 +33,14 @@ TEST(ScanUpdate, MergedPartsEqualOneGather) {
   const Grid grid(0.05);
   const auto points = randomPoints(5000, 2);
   const Eigen::Vector3f origin(0.0f, 0.0f, 0.5f);
+  OccupancyParams exact;
+  exact.free_space_tracing = FreeSpaceTracing::kOctomapExact;
   ScanUpdate whole;
-  whole.gather(grid, OccupancyParams{}, origin, points);
+  whole.gather(grid, exact, origin, points);
   whole.resolve();
   ScanUpdate a, b;
-  a.gather(grid, OccupancyParams{}, origin, std::span(points).first(1234));
-  b.gather(grid, OccupancyParams{}, origin, std::span(points).subspan(1234));
+  a.gather(grid, exact, origin, std::span(points).first(1234));
+  b.gather(grid, exact, origin, std::span(points).subspan(1234));
   a.merge(std::move(b));
   a.resolve();
   EXPECT_EQ(a.stats().points, whole.stats().points);
