@@ -30,6 +30,8 @@ int main(int argc, char** argv) {
   m->add_option("--sim-rings", map3d.sim.rings, "simulated lidar rings")->check(CLI::Range(1, 1024));
   m->add_option("--sim-columns", map3d.sim.columns, "simulated lidar columns")->check(CLI::Range(1, 16384));
   m->add_option("--sim-seed", map3d.sim.seed, "simulation seed");
+  m->add_option("--sim-sensor-height", map3d.sim.sensor_height_m, "simulated lidar height above the floor, metres")
+      ->check(CLI::PositiveNumber);
 
   CLI11_PARSE(app, argc, argv);
   try {

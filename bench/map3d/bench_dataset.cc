@@ -23,6 +23,7 @@ BenchDataset simulate(const std::string& name, std::shared_ptr<const sim::VoxelW
               std::to_string(o.poses) + " poses)";
   sim::TrajectoryOptions traj;
   traj.num_poses = o.poses;
+  traj.sensor_height_m = o.sensor_height_m;
   const std::vector<Eigen::Isometry3d> poses = sim::planTrajectory(*world, traj, o.seed);
   sim::LidarModel lidar;
   lidar.rings = o.rings;

@@ -16,6 +16,7 @@ struct SimOptions {
   int rings = 64;       ///< lidar rings
   int columns = 1024;   ///< lidar columns
   double max_range_m = 30.0;
+  double sensor_height_m = 1.3;  ///< lidar above the floor (a mast); lower ones squeeze through fewer gaps of geb079
   uint64_t seed = 1;
 };
 
