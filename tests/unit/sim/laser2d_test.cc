@@ -1,5 +1,7 @@
 #include "sim/laser2d.h"
 
+#include "test_worlds.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -11,23 +13,11 @@ namespace {
 
 using Eigen::Vector3d;
 
-Eigen::AlignedBox3d box(double x0, double y0, double z0, double x1, double y1, double z1) {
-  return {Vector3d(x0, y0, z0), Vector3d(x1, y1, z1)};
-}
+using test::at;
+using test::box;
 
-/// Square room [−5, 5]² × [0, 3] inside a 0.3 m shell, walls of reflectivity 0.6.
-VoxelWorld room() {
-  VoxelWorld w = VoxelWorld::covering(box(-5.3, -5.3, -0.3, 5.3, 5.3, 3.3), 0.05);
-  w.fillBox(box(-5.3, -5.3, -0.3, 5.3, 5.3, 3.3), 0.6f);
-  w.clearBox(box(-5, -5, 0, 5, 5, 3));
-  return w;
-}
-
-Eigen::Isometry3d at(double x, double y, double z) {
-  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
-  pose.translation() = Vector3d(x, y, z);
-  return pose;
-}
+/// Square room [−5, 5]² × [0, 3], walls of reflectivity 0.6.
+VoxelWorld room() { return test::closedRoom(3.0, 0.6f); }
 
 TEST(Laser2d, GeometryAndConventions) {
   const VoxelWorld w = room();

@@ -1,5 +1,7 @@
 #include "sim/lidar.h"
 
+#include "test_worlds.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -11,30 +13,16 @@ namespace {
 
 using Eigen::Vector3d;
 
-Eigen::AlignedBox3d box(double x0, double y0, double z0, double x1, double y1, double z1) {
-  return {Vector3d(x0, y0, z0), Vector3d(x1, y1, z1)};
-}
+using test::at;
+using test::box;
 
-/// Closed room [−5, 5] × [−5, 5] × [0, 4] (inside) with 0.3 m shell.
-VoxelWorld closedRoom() {
-  VoxelWorld w = VoxelWorld::covering(box(-5.3, -5.3, -0.3, 5.3, 5.3, 4.3), 0.05);
-  w.fillBox(box(-5.3, -5.3, -0.3, 5.3, 5.3, 4.3), 0.5f);
-  w.clearBox(box(-5, -5, 0, 5, 5, 4));
-  return w;
-}
+VoxelWorld closedRoom() { return test::closedRoom(4.0, 0.5f); }
 
 /// A wide wall x ∈ [15, 15.3] of reflectivity rho.
 VoxelWorld wall(float rho) {
   VoxelWorld w = VoxelWorld::covering(box(-1, -25, -5, 16, 25, 5), 0.1);
   w.fillBox(box(15, -25, -5, 15.3, 25, 5), rho);
   return w;
-}
-
-Eigen::Isometry3d at(double x, double y, double z, double yaw = 0.0) {
-  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
-  pose.translation() = Vector3d(x, y, z);
-  pose.linear() = Eigen::AngleAxisd(yaw, Vector3d::UnitZ()).toRotationMatrix();
-  return pose;
 }
 
 /// 65 rings so ring 32 is level; no noise so intensities follow the model exactly.
