@@ -63,7 +63,7 @@ void validateParams(double resolution_m, const OccupancyParams& o, const FusionP
     throw std::invalid_argument("fusion tolerance must be finite and >= 0");
   }
   if (f.fuse_after_scans < 0) throw std::invalid_argument("fuse_after_scans must be >= 0");
-  if (o.stop_after_freed_cells < 1) throw std::invalid_argument("stop_after_freed_cells must be >= 1");
+  if (o.stop_after_freed_cells < 2) throw std::invalid_argument("stop_after_freed_cells must be >= 2");
   if (std::isnan(o.max_range_m)) throw std::invalid_argument("max_range_m must not be NaN (< 0 means unlimited)");
 }
 

@@ -22,10 +22,11 @@ enum class FreeSpaceTracing {
   /// Every ray walked in full from the sensor, with OctoMap's arithmetic: the
   /// same cells as OctoMap's insertPointCloud.
   kOctomapExact,
-  /// Every ray walked from its end back towards the sensor until it has met
-  /// `stop_after_freed_cells` consecutive cells that earlier rays of the same
-  /// scan freed: its path has merged with theirs, and near the sensor rays
-  /// crowd the same cells, so most of each walk is skipped. Where two merged
+  /// Every ray walked from its end back towards the sensor until it has met a
+  /// run of consecutive cells that earlier rays of the same scan freed: its
+  /// path has merged with theirs, and near the sensor rays crowd the same
+  /// cells, so most of each walk is skipped. The run is a quarter of the cells
+  /// left to the sensor, at least 2 and at most `stop_after_freed_cells`. Where two merged
   /// paths would still part by a cell on the way to the sensor, that cell is
   /// not freed by this ray; docs/BENCHMARKS.md measures the effect against
   /// OctoMap (agreement ≥ 0.998 with the default run length).
@@ -45,9 +46,8 @@ struct OccupancyParams {
   double max_range_m = -1.0;
   SensorModel sensor_model = SensorModel::kBeam;
   FreeSpaceTracing free_space_tracing = FreeSpaceTracing::kStopAtFreed;
-  /// kStopAtFreed: a walk stops after this many consecutive cells that earlier
-  /// rays of the scan freed, >= 1. Larger is closer to exact and slower
-  /// (8: agreement ≈ 0.992–0.996; 16: ≈ 0.998–0.9996 on the benchmark data).
+  /// kStopAtFreed: the longest run of already freed cells a walk needs before
+  /// it stops, >= 2. Larger is closer to exact and slower.
   int stop_after_freed_cells = 16;
 };
 

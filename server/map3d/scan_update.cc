@@ -5,16 +5,27 @@
 #include "map3d/ray_traversal.h"
 
 namespace rmap::map3d {
+namespace {
+
+/// kStopAtFreed: the run of already freed cells that stops a walk is a
+/// quarter of the cells left to the sensor, at least 2, at most
+/// OccupancyParams::stop_after_freed_cells.
+constexpr int kCellsLeftPerRunCell = 4;
+constexpr int kShortestRun = 2;
+
+}  // namespace
 
 BlockMarks& ScanUpdate::lookUp(const BlockKey& key) {
-  auto [it, inserted] = index_.try_emplace(key, static_cast<uint32_t>(blocks_.size()));
-  if (inserted) {
+  uint32_t slot = index_.find(key);
+  if (slot == BlockIndex::kMissing) {
+    slot = static_cast<uint32_t>(blocks_.size());
+    index_.insert(key, slot);
     blocks_.emplace_back();
     blocks_.back().key = key;
   }
   last_key_ = key;
-  last_slot_ = it->second;
-  return blocks_[last_slot_];
+  last_slot_ = slot;
+  return blocks_[slot];
 }
 
 void ScanUpdate::gather(const Grid& grid, const OccupancyParams& params, const Eigen::Vector3f& sensor_origin_m,
@@ -28,7 +39,7 @@ void ScanUpdate::gather(const Grid& grid, const OccupancyParams& params, const E
     return;
   }
   bool origin_freed = false;
-  const int stop_run = std::max(1, params.stop_after_freed_cells);
+  const int stop_run = std::max(kShortestRun, params.stop_after_freed_cells);
   auto free = [&](const Eigen::Vector3f& end_m) {
     if (exact) {
       traverseFreeCells(grid, sensor_origin_m, end_m, [this](const CellKey& c) { markFree(c); });
@@ -52,7 +63,11 @@ void ScanUpdate::gather(const Grid& grid, const OccupancyParams& params, const E
         freed_run = 0;
         return true;
       }
-      return ++freed_run < stop_run;
+      // Close to the sensor a shorter run suffices: what is left of the walk is
+      // short and crowded by other rays (measured in docs/BENCHMARKS.md).
+      const int cells_left =
+          std::abs(c.x - origin_cell.x) + std::abs(c.y - origin_cell.y) + std::abs(c.z - origin_cell.z);
+      return ++freed_run < std::clamp(cells_left / kCellsLeftPerRunCell, kShortestRun, stop_run);
     });
     if (left_origin && !origin_freed) {
       markFree(origin_cell);

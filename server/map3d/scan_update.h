@@ -6,9 +6,9 @@
 #include <Eigen/Core>
 #include <cstdint>
 #include <span>
-#include <unordered_map>
 #include <vector>
 
+#include "map3d/block_index.h"
 #include "map3d/cell_key.h"
 #include "map3d/dense_cells.h"
 #include "map3d/occupancy_params.h"
@@ -61,7 +61,7 @@ class ScanUpdate {
   void markOccupied(const CellKey& c) { marksOf(blockOf(c)).occupied.set(localIndex(c)); }
 
   std::vector<BlockMarks> blocks_;
-  std::unordered_map<BlockKey, uint32_t, BlockKeyHash> index_;
+  BlockIndex index_;
   BlockKey last_key_{INT32_MIN, INT32_MIN, INT32_MIN};
   uint32_t last_slot_ = 0;
   ScanStats stats_;
