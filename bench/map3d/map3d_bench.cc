@@ -63,7 +63,7 @@ RmapRun runRmap(const std::vector<datasets::PointScan>& scans, double resolution
   for (const datasets::PointScan& s : scans) {
     if (!s.points_m.empty()) run.map->insertScan(s.sensor_origin_m, s.points_m, options);
   }
-  run.map->fuseAll();  // counted: the stored map is the fused one
+  run.map->fuseAll(threads);  // counted: the stored map is the fused one
   run.insert_s = secondsSince(t0);
   return run;
 }

@@ -8,6 +8,7 @@
 #include <thread>
 
 #include "map3d/fusion.h"
+#include "map3d/parallel_for.h"
 #include "map3d/ray_traversal.h"
 
 namespace rmap::map3d {
@@ -122,51 +123,81 @@ ScanStats CuboidMap::insertScan(const Eigen::Vector3f& sensor_origin_m, std::spa
   std::unique_lock lock(mutex_);
   ++scans_;
   ++version_;
-  applyUpdate(update);
-  fuseColdBlocks();
+  applyUpdate(update, options.threads);
+  fuseColdBlocks(options.threads);
   return update.stats();
 }
 
-CuboidMap::Block& CuboidMap::blockForWrite(const BlockKey& key) {
+CuboidMap::Block& CuboidMap::findOrCreate(const BlockKey& key) {
   auto [it, inserted] = blocks_.try_emplace(key);
   if (inserted) {
     it->second = std::make_unique<Block>();
     it->second->key = key;
   }
-  Block& block = *it->second;
-  if (!block.dense) expand(block);
+  return *it->second;
+}
+
+CuboidMap::Block& CuboidMap::blockForWrite(const BlockKey& key) {
+  Block& block = findOrCreate(key);
+  if (!block.dense) {
+    makeHot(block);
+    fillFromCuboids(block);
+  }
   return block;
 }
 
-void CuboidMap::expand(Block& block) {
+void CuboidMap::makeHot(Block& block) {
   block.dense.reset(new DenseCells);  // default-init: only the known bits are zeroed, values are written before use
-  expandCuboids(block.cuboids, *block.dense);
-  block.cuboids.clear();
-  block.cuboids.shrink_to_fit();
   block.hot_index = static_cast<int32_t>(hot_.size());
   hot_.push_back(&block);
 }
 
-void CuboidMap::fuse(Block& block) {
-  block.cuboids = fuseBlock(*block.dense, fusion_.tolerance_log_odds, occupancy_.occupied_threshold_log_odds);
+void CuboidMap::fillFromCuboids(Block& block) {
+  expandCuboids(block.cuboids, *block.dense);
+  block.cuboids.clear();
   block.cuboids.shrink_to_fit();
-  block.dense.reset();
-  // swap-remove from the hot list
-  Block* last = hot_.back();
-  hot_[block.hot_index] = last;
-  last->hot_index = block.hot_index;
-  hot_.pop_back();
-  block.hot_index = -1;
 }
 
-void CuboidMap::applyUpdate(const ScanUpdate& update) {
+void CuboidMap::fuseBlocks(const std::vector<Block*>& blocks, int threads) {
+  parallelFor(blocks.size(), threads, [&](size_t i) {
+    Block& block = *blocks[i];
+    block.cuboids = fuseBlock(*block.dense, fusion_.tolerance_log_odds, occupancy_.occupied_threshold_log_odds);
+    block.cuboids.shrink_to_fit();
+    block.dense.reset();
+  });
+  for (Block* block : blocks) {
+    // swap-remove from the hot list
+    Block* last = hot_.back();
+    hot_[block->hot_index] = last;
+    last->hot_index = block->hot_index;
+    hot_.pop_back();
+    block->hot_index = -1;
+  }
+}
+
+void CuboidMap::applyUpdate(const ScanUpdate& update, int threads) {
+  struct Job {
+    Block* block;
+    const BlockMarks* marks;
+    bool fill;  ///< the block was fused: expand its cuboids first
+  };
+  std::vector<Job> jobs;
+  jobs.reserve(update.blocks().size());
+  for (const BlockMarks& marks : update.blocks()) {
+    if (!marks.free.any() && !marks.occupied.any()) continue;
+    Block& block = findOrCreate(marks.key);
+    const bool fill = !block.dense;
+    if (fill) makeHot(block);
+    jobs.push_back({&block, &marks, fill});
+  }
   const float hit = occupancy_.hit_log_odds;
   const float miss = occupancy_.miss_log_odds;
   const float lo = occupancy_.clamp_min_log_odds;
   const float hi = occupancy_.clamp_max_log_odds;
-  for (const BlockMarks& marks : update.blocks()) {
-    if (!marks.free.any() && !marks.occupied.any()) continue;
-    Block& block = blockForWrite(marks.key);
+  parallelFor(jobs.size(), threads, [&](size_t j) {
+    const Job& job = jobs[j];
+    Block& block = *job.block;
+    if (job.fill) fillFromCuboids(block);
     DenseCells& cells = *block.dense;
     // Same float arithmetic as OctoMap: new cells start at 0, add, then clamp.
     auto apply = [&](int i, float delta) {
@@ -175,27 +206,24 @@ void CuboidMap::applyUpdate(const ScanUpdate& update) {
       cells.log_odds[i] = std::clamp(v, lo, hi);
       cells.known.set(i);
     };
-    marks.free.forEach([&](int i) { apply(i, miss); });
-    marks.occupied.forEach([&](int i) { apply(i, hit); });
+    job.marks->free.forEach([&](int i) { apply(i, miss); });
+    job.marks->occupied.forEach([&](int i) { apply(i, hit); });
     block.last_update_scan = scans_;
     block.version = version_;
-  }
+  });
 }
 
-void CuboidMap::fuseColdBlocks() {
-  for (size_t i = 0; i < hot_.size();) {
-    Block* block = hot_[i];
-    if (scans_ - block->last_update_scan >= static_cast<uint64_t>(fusion_.fuse_after_scans)) {
-      fuse(*block);  // moves another block into slot i
-    } else {
-      ++i;
-    }
+void CuboidMap::fuseColdBlocks(int threads) {
+  std::vector<Block*> cold;
+  for (Block* block : hot_) {
+    if (scans_ - block->last_update_scan >= static_cast<uint64_t>(fusion_.fuse_after_scans)) cold.push_back(block);
   }
+  fuseBlocks(cold, threads);
 }
 
-void CuboidMap::fuseAll() {
+void CuboidMap::fuseAll(int threads) {
   std::unique_lock lock(mutex_);
-  while (!hot_.empty()) fuse(*hot_.back());
+  fuseBlocks(std::vector<Block*>(hot_), threads);
 }
 
 void CuboidMap::replaceBlocks(std::vector<std::pair<BlockKey, std::vector<PackedCuboid>>> blocks) {
@@ -230,8 +258,8 @@ void CuboidMap::replaceBlocks(std::vector<std::pair<BlockKey, std::vector<Packed
     block.dense->known = BlockBits{};
     expandCuboids(cuboids, *block.dense);
     block.version = version_;
-    fuse(block);
   }
+  fuseBlocks(std::vector<Block*>(hot_), 1);
 }
 
 void CuboidMap::setCuboids(std::span<const CuboidBox> boxes) {
@@ -270,7 +298,7 @@ void CuboidMap::setCuboids(std::span<const CuboidBox> boxes) {
       }
     }
   }
-  while (!hot_.empty()) fuse(*hot_.back());
+  fuseBlocks(std::vector<Block*>(hot_), 1);
 }
 
 // ---------------------------------------------------------------- reading

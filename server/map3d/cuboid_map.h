@@ -110,7 +110,8 @@ class CuboidMap {
                        const InsertOptions& options = {});
 
   /// Fuses every hot block now (e.g. before measuring or saving).
-  void fuseAll();
+  /// @param threads  threads fusing blocks, >= 1
+  void fuseAll(int threads = 1);
 
   CellQuery query(const Eigen::Vector3d& point_m) const;
   CellQuery queryCell(const CellKey& cell) const;
@@ -165,11 +166,16 @@ class CuboidMap {
  private:
   struct Block;
   CellQuery queryCellLocked(const CellKey& cell) const;
+  Block& findOrCreate(const BlockKey& key);
+  /// A hot block for writing: fused ones are expanded.
   Block& blockForWrite(const BlockKey& key);
-  void expand(Block& block);
-  void fuse(Block& block);
-  void fuseColdBlocks();
-  void applyUpdate(const ScanUpdate& update);
+  /// Gives a fused block its dense cells (not yet filled) and lists it as hot.
+  void makeHot(Block& block);
+  void fillFromCuboids(Block& block);
+  /// Fuses hot blocks (in parallel) and takes them off the hot list.
+  void fuseBlocks(const std::vector<Block*>& blocks, int threads);
+  void fuseColdBlocks(int threads);
+  void applyUpdate(const ScanUpdate& update, int threads);
   uint64_t memoryBytesLocked() const;
 
   Grid grid_;

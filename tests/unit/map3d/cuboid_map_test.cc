@@ -83,7 +83,7 @@ TEST(CuboidMap, ZeroToleranceEqualsOctomapCellForCell) {
         tree.insertPointCloud(pc, op(s.origin));
       }
       expectSameAsOctomap(map, tree, true);
-      map.fuseAll();
+      map.fuseAll(threads);
       expectSameAsOctomap(map, tree, true);
     }
   }
