@@ -24,6 +24,9 @@ int main(int argc, char** argv) {
   m->add_option("--max-range", map3d.max_range_m, "metres; rays beyond are truncated (default unlimited)");
   m->add_option("--sensor-model", map3d.sensor_models, "beam, endpoint or both")
       ->check(CLI::IsMember({"beam", "endpoint", "both"}));
+  m->add_option("--free-space", map3d.free_space,
+                "ray walks: exact (OctoMap's cells), stop-at-freed, or auto (exact when --fusion-tolerance is 0)")
+      ->check(CLI::IsMember({"auto", "exact", "stop-at-freed"}));
   m->add_option("--json", map3d.json_out, "write results as JSON to this file");
   m->add_option("--shared-data", map3d.shared_data_dir, "folder of the shared datasets (for sim:geb079)");
   m->add_option("--sim-poses", map3d.sim.poses, "simulated trajectory length")->check(CLI::Range(1, 100000));

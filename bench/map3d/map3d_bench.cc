@@ -246,6 +246,10 @@ int runMap3dBench(const Map3dBenchOptions& o) {
   if (o.fuse_after_scans >= 0) fusion.fuse_after_scans = o.fuse_after_scans;
   map3d::OccupancyParams occupancy;
   occupancy.max_range_m = o.max_range_m;
+  const bool exact_walks =
+      o.free_space == "exact" || (o.free_space == "auto" && fusion.tolerance_log_odds == 0.0f);
+  occupancy.free_space_tracing =
+      exact_walks ? map3d::FreeSpaceTracing::kOctomapExact : map3d::FreeSpaceTracing::kStopAtFreed;
 
   json result = {{"dataset", data.name},
                  {"resolution_m", o.resolution_m},
@@ -255,6 +259,7 @@ int runMap3dBench(const Map3dBenchOptions& o) {
                  {"fusion_tolerance", fusion.tolerance_log_odds},
                  {"fuse_after_scans", fusion.fuse_after_scans},
                  {"max_range_m", o.max_range_m},
+                 {"free_space", exact_walks ? "exact" : "stop-at-freed"},
                  {"machine", {{"cpu", cpuModel()}, {"hardware_threads", std::thread::hardware_concurrency()}}}};
   std::cout << data.name << " at " << o.resolution_m << " m, " << data.scans.size() << " scans, " << points
             << " points, " << o.threads << " thread(s), fusion tolerance " << fusion.tolerance_log_odds << std::endl;

@@ -16,6 +16,9 @@ struct Map3dBenchOptions {
   int threads = 1;                  ///< for both maps
   double max_range_m = -1.0;        ///< metres; < 0 unlimited
   std::string sensor_models = "both";  ///< beam | endpoint | both
+  /// exact | stop-at-freed | auto (exact when the fusion tolerance is 0, so
+  /// that "fusion off" means OctoMap's map cell for cell)
+  std::string free_space = "auto";
   std::string json_out;             ///< empty: no file
   std::string shared_data_dir;
   SimOptions sim;
