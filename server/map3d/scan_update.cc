@@ -1,7 +1,6 @@
 #include "map3d/scan_update.h"
 
 #include <algorithm>
-#include <limits>
 
 #include "map3d/ray_traversal.h"
 
@@ -41,15 +40,36 @@ void ScanUpdate::gather(const Grid& grid, const OccupancyParams& params, const E
   }
   bool origin_freed = false;
   const int stop_run = std::max(kShortestRun, params.stop_after_freed_cells);
-  // end_cell: the cell of end_m, already known to be addressable
-  auto free = [&](const Eigen::Vector3f& end_m, const CellKey& end_cell) {
+  auto free = [&](const Eigen::Vector3f& end_m) {
     if (exact) {
       traverseFreeCells(grid, sensor_origin_m, end_m, [this](const CellKey& c) { markFree(c); });
       return;
     }
-    if (end_cell == origin_cell) return;
-    walkBack(grid.resolution(), sensor_origin_m, origin_cell, end_m, end_cell, stop_run);
-    if (!origin_freed) {
+    // Walk back from the end; the walk's first cell is the end cell itself, and
+    // it never reaches the sensor's cell, which is freed once below.
+    bool end_cell = true;
+    bool left_origin = false;
+    int freed_run = 0;
+    traverseFreeCells(grid, end_m, sensor_origin_m, [&](const CellKey& c) {
+      left_origin = true;
+      if (end_cell) {
+        end_cell = false;
+        return true;
+      }
+      BlockMarks& marks = marksOf(blockOf(c));
+      const int i = localIndex(c);
+      if (!marks.free.test(i)) {
+        marks.free.set(i);
+        freed_run = 0;
+        return true;
+      }
+      // Close to the sensor a shorter run suffices: what is left of the walk is
+      // short and crowded by other rays (measured in docs/BENCHMARKS.md).
+      const int cells_left =
+          std::abs(c.x - origin_cell.x) + std::abs(c.y - origin_cell.y) + std::abs(c.z - origin_cell.z);
+      return ++freed_run < std::clamp(cells_left / kCellsLeftPerRunCell, kShortestRun, stop_run);
+    });
+    if (left_origin && !origin_freed) {
       markFree(origin_cell);
       origin_freed = true;
     }
@@ -69,62 +89,13 @@ void ScanUpdate::gather(const Grid& grid, const OccupancyParams& params, const E
         if (beam) {
           const Eigen::Vector3f dir = d / static_cast<float>(range);
           const Eigen::Vector3f truncated = sensor_origin_m + dir * static_cast<float>(params.max_range_m);
-          CellKey truncated_cell;
-          if (grid.cellChecked(truncated, truncated_cell)) free(truncated, truncated_cell);
+          free(truncated);
         }
         continue;
       }
     }
-    if (beam) free(p, end);
+    if (beam) free(p);
     markOccupied(end);
-  }
-}
-
-void ScanUpdate::walkBack(double resolution_m, const Eigen::Vector3f& origin_m, const CellKey& origin_cell,
-                          const Eigen::Vector3f& end_m, const CellKey& end_cell, int longest_run) {
-  // The line end + t·(origin − end), t ∈ [0, 1]. Each step moves one axis one
-  // cell towards the sensor's cell; an axis that got there is never chosen
-  // again, so the walk reaches that cell in exactly `left` steps whatever the
-  // rounding, and stops one step short of it.
-  int32_t cell[3] = {end_cell.x, end_cell.y, end_cell.z};
-  int32_t step[3];
-  int32_t to_go[3];
-  double t_max[3], t_delta[3];
-  int left = 0;
-  for (int a = 0; a < 3; ++a) {
-    to_go[a] = std::abs(origin_cell[a] - cell[a]);
-    left += to_go[a];
-    step[a] = origin_cell[a] > cell[a] ? 1 : -1;
-    if (to_go[a] == 0) {
-      t_max[a] = t_delta[a] = std::numeric_limits<double>::infinity();
-      continue;
-    }
-    const double inv = 1.0 / (static_cast<double>(origin_m[a]) - static_cast<double>(end_m[a]));
-    const double border = (cell[a] + (step[a] > 0 ? 1 : 0)) * resolution_m;
-    t_max[a] = (border - end_m[a]) * inv;
-    t_delta[a] = resolution_m * std::abs(inv);
-  }
-  int freed_run = 0;
-  while (--left > 0) {
-    int dim;
-    if (t_max[0] < t_max[1]) {
-      dim = t_max[0] < t_max[2] ? 0 : 2;
-    } else {
-      dim = t_max[1] < t_max[2] ? 1 : 2;
-    }
-    cell[dim] += step[dim];
-    t_max[dim] = --to_go[dim] == 0 ? std::numeric_limits<double>::infinity() : t_max[dim] + t_delta[dim];
-    const CellKey c{cell[0], cell[1], cell[2]};
-    BlockMarks& marks = marksOf(blockOf(c));
-    const int i = localIndex(c);
-    if (!marks.free.test(i)) {
-      marks.free.set(i);
-      freed_run = 0;
-      continue;
-    }
-    // Close to the sensor a shorter run suffices: what is left of the walk is
-    // short and crowded by other rays (measured in docs/BENCHMARKS.md).
-    if (++freed_run >= std::clamp(left / kCellsLeftPerRunCell, kShortestRun, longest_run)) return;
   }
 }
 

@@ -57,11 +57,6 @@ class ScanUpdate {
     return lookUp(key);
   }
   BlockMarks& lookUp(const BlockKey& key);
-  /// FreeSpaceTracing::kStopAtFreed: frees the cells between a ray's end cell
-  /// and the sensor's cell (both excluded), walking back from the end until a
-  /// run of cells earlier rays freed shows the paths have merged.
-  void walkBack(double resolution_m, const Eigen::Vector3f& origin_m, const CellKey& origin_cell,
-                const Eigen::Vector3f& end_m, const CellKey& end_cell, int longest_run);
   void markFree(const CellKey& c) { marksOf(blockOf(c)).free.set(localIndex(c)); }
   void markOccupied(const CellKey& c) { marksOf(blockOf(c)).occupied.set(localIndex(c)); }
 
