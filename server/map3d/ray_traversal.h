@@ -48,18 +48,6 @@ class RayWalker {
     return true;
   }
 
-  /// The walker's variables, for loops that keep several rays in flight.
-  struct State {
-    CellKey cell;
-    int32_t step[3];
-    double t_max[3];
-    double t_delta[3];
-  };
-  State state() const {
-    return {current_, {step_[0], step_[1], step_[2]}, {t_max_[0], t_max_[1], t_max_[2]},
-            {t_delta_[0], t_delta_[1], t_delta_[2]}};
-  }
-
   const CellKey& cell() const { return current_; }
   const CellKey& endCell() const { return end_; }
   bool atEnd() const { return current_ == end_; }
