@@ -4,6 +4,7 @@
 #include <fstream>
 #include <iostream>
 #include <nlohmann/json.hpp>
+#include <random>
 #include <thread>
 
 #include "map3d/cuboid_map.h"
@@ -103,6 +104,41 @@ double agreement(const map3d::CuboidMap& rmap, const OctomapSide& octomap) {
   return either ? static_cast<double>(same) / static_cast<double>(either) : 1.0;
 }
 
+/// Point queries per second of both maps over the same cells: every known
+/// cell of rmap's map (up to 500,000, evenly sampled) and as many random cells
+/// of its bounding box, so hits and misses both count.
+json queryRates(const map3d::CuboidMap& rmap, const OctomapSide& octomap) {
+  std::vector<CellKey> cells;
+  const uint64_t known = rmap.stats().known_cells;
+  const uint64_t stride = std::max<uint64_t>(1, known / 500000);
+  uint64_t n = 0;
+  rmap.forEachKnownCell([&](const CellKey& c, float) {
+    if (n++ % stride == 0) cells.push_back(c);
+  });
+  CellKey lo, hi;
+  if (cells.empty() || !rmap.bounds(lo, hi)) return nullptr;
+  std::mt19937 rng(7);
+  const size_t hits = cells.size();
+  for (size_t i = 0; i < hits; ++i) {
+    CellKey c;
+    for (int a = 0; a < 3; ++a) c[a] = std::uniform_int_distribution<int32_t>(lo[a], hi[a])(rng);
+    cells.push_back(c);
+  }
+  uint64_t occupied = 0;
+  auto t0 = Clock::now();
+  for (const CellKey& c : cells) occupied += rmap.queryCell(c).state == CellState::kOccupied;
+  const double rmap_s = secondsSince(t0);
+  uint64_t occupied_octomap = 0;
+  t0 = Clock::now();
+  for (const CellKey& c : cells) occupied_octomap += octomap.state(c) == CellState::kOccupied;
+  const double octomap_s = secondsSince(t0);
+  return {{"queries", cells.size()},
+          {"rmap_per_s", cells.size() / rmap_s},
+          {"octomap_per_s", cells.size() / octomap_s},
+          {"ratio", octomap_s / rmap_s},
+          {"occupied_answers", {{"rmap", occupied}, {"octomap", occupied_octomap}}}};
+}
+
 /// OctoMap's cross-validation score: share of the held-out scans' endpoint
 /// cells found occupied and ray cells found free, per scan semantics.
 template <class StateFn>
@@ -164,6 +200,7 @@ json compareOnce(const BenchDataset& data, const Map3dBenchOptions& o, const map
   out["speedup"] = octo.insert_s / rmap.insert_s;
   out["memory_ratio"] = static_cast<double>(stats.memory_bytes) / static_cast<double>(octo.tree->memoryBytes());
   out["cuboid_ratio"] = static_cast<double>(stats.cuboids) / static_cast<double>(octo.tree->leaves());
+  out["point_query"] = queryRates(*rmap.map, *octo.tree);
   std::cerr << "  agreement ..." << std::endl;
   out["agreement"] = agreement(*rmap.map, *octo.tree);
   {
@@ -222,6 +259,8 @@ void printRow(const std::string& model, const json& r) {
             << " s, " << r["octomap"]["leaves"] << " leaves, " << r["octomap"]["memory_bytes"] << " B\n"
             << "  speedup " << r["speedup"].get<double>() << "  memory_ratio " << r["memory_ratio"].get<double>()
             << "  cuboid_ratio " << r["cuboid_ratio"].get<double>() << "  agreement " << r["agreement"].get<double>()
+            << "\n  point queries/s rmap " << r["point_query"]["rmap_per_s"].get<double>() << " octomap "
+            << r["point_query"]["octomap_per_s"].get<double>()
             << "\n  fusion off (tolerance 0, exact walks): speedup " << r["fusion_off"]["speedup"].get<double>()
             << "  agreement " << r["fusion_off"]["agreement"].get<double>() << "\n"
             << "  cv_accuracy rmap " << r["cv_accuracy"]["rmap"].get<double>() << " octomap "

@@ -28,6 +28,7 @@ struct CuboidMap::Block {
   BlockKey key;
   std::unique_ptr<DenseCells> dense;  ///< hot form; null when fused
   std::vector<PackedCuboid> cuboids;  ///< fused form; empty while hot
+  std::unique_ptr<SliceIndex> slices;  ///< lookup index of a fused block with many cuboids
   uint64_t last_update_scan = 0;
   uint64_t version = 0;
   int32_t hot_index = -1;  ///< position in hot_, -1 when fused
@@ -156,6 +157,7 @@ void CuboidMap::fillFromCuboids(Block& block) {
   expandCuboids(block.cuboids, *block.dense);
   block.cuboids.clear();
   block.cuboids.shrink_to_fit();
+  block.slices.reset();
 }
 
 void CuboidMap::fuseBlocks(const std::vector<Block*>& blocks, int threads) {
@@ -163,6 +165,7 @@ void CuboidMap::fuseBlocks(const std::vector<Block*>& blocks, int threads) {
     Block& block = *blocks[i];
     block.cuboids = fuseBlock(*block.dense, fusion_.tolerance_log_odds, occupancy_.occupied_threshold_log_odds);
     block.cuboids.shrink_to_fit();
+    if (block.cuboids.size() >= SliceIndex::kMinCuboids) block.slices = std::make_unique<SliceIndex>(block.cuboids);
     block.dense.reset();
   });
   for (Block* block : blocks) {
@@ -326,7 +329,8 @@ CellQuery CuboidMap::queryCellLocked(const CellKey& cell) const {
     q.cuboid = {cell, cell, q.log_odds};
   } else {
     constexpr int m = kBlockEdge - 1;
-    const int found = findCuboid(block.cuboids, cell.x & m, cell.y & m, cell.z & m);
+    const int x = cell.x & m, y = cell.y & m, z = cell.z & m;
+    const int found = block.slices ? block.slices->find(block.cuboids, x, y, z) : findCuboid(block.cuboids, x, y, z);
     if (found < 0) return q;
     q.cuboid = toWorld(block.key, block.cuboids[found]);
     q.log_odds = q.cuboid.log_odds;
@@ -520,6 +524,7 @@ uint64_t CuboidMap::memoryBytesLocked() const {
                    hot_.capacity() * sizeof(Block*);
   for (const auto& [key, block] : blocks_) {
     bytes += sizeof(Block) + block->cuboids.capacity() * sizeof(PackedCuboid);
+    if (block->slices) bytes += block->slices->memoryBytes();
     if (block->dense) bytes += sizeof(DenseCells);
   }
   return bytes;

@@ -109,4 +109,25 @@ int findCuboid(const std::vector<PackedCuboid>& cuboids, int x, int y, int z) {
   return -1;
 }
 
+SliceIndex::SliceIndex(const std::vector<PackedCuboid>& fused) {
+  for (const PackedCuboid& c : fused) {
+    for (int z = c.lo(2); z <= c.hi(2); ++z) ++offsets[z + 1];
+  }
+  for (int z = 0; z < kBlockEdge; ++z) offsets[z + 1] += offsets[z];
+  cuboids.resize(offsets[kBlockEdge]);
+  std::array<uint32_t, kBlockEdge> fill{};
+  for (size_t i = 0; i < fused.size(); ++i) {
+    for (int z = fused[i].lo(2); z <= fused[i].hi(2); ++z) {
+      cuboids[offsets[z] + fill[z]++] = static_cast<uint16_t>(i);
+    }
+  }
+}
+
+int SliceIndex::find(const std::vector<PackedCuboid>& fused, int x, int y, int z) const {
+  for (uint32_t k = offsets[z]; k < offsets[z + 1]; ++k) {
+    if (fused[cuboids[k]].contains(x, y, z)) return cuboids[k];
+  }
+  return -1;
+}
+
 }  // namespace rmap::map3d

@@ -3,6 +3,7 @@
 /// Decomposition of a block into maximal cuboids of similar occupancy, and
 /// the reverse expansion.
 
+#include <array>
 #include <vector>
 
 #include "map3d/cuboid.h"
@@ -21,7 +22,19 @@ std::vector<PackedCuboid> fuseBlock(const DenseCells& cells, float tolerance, fl
 /// Writes the cuboids' values into `cells` (known bits set); other cells untouched.
 void expandCuboids(const std::vector<PackedCuboid>& cuboids, DenseCells& cells);
 
-/// Index of the cuboid that holds in-block cell (x, y, z), or -1.
+/// Index of the cuboid that holds in-block cell (x, y, z), or -1 (a linear scan).
 int findCuboid(const std::vector<PackedCuboid>& cuboids, int x, int y, int z);
+
+/// Lists, per z slice of a block, the cuboids that reach into it, so a point
+/// lookup scans about a sixteenth of a block's cuboids times their depth.
+struct SliceIndex {
+  static constexpr size_t kMinCuboids = 32;  ///< smaller blocks scan linearly
+  std::array<uint32_t, kBlockEdge + 1> offsets{};  ///< slice z lists cuboids[offsets[z], offsets[z+1])
+  std::vector<uint16_t> cuboids;                   ///< cuboid indices, slice after slice
+
+  explicit SliceIndex(const std::vector<PackedCuboid>& fused);
+  int find(const std::vector<PackedCuboid>& fused, int x, int y, int z) const;
+  size_t memoryBytes() const { return sizeof(*this) + cuboids.capacity() * sizeof(uint16_t); }
+};
 
 }  // namespace rmap::map3d

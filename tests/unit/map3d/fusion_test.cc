@@ -65,6 +65,21 @@ TEST(Fusion, ToleranceBoundsEveryCellAndMergesMore) {
   }
 }
 
+TEST(Fusion, SliceIndexFindsTheSameCuboidAsAScan) {
+  for (uint32_t seed = 0; seed < 10; ++seed) {
+    const DenseCells cells = randomBlock(seed);
+    const auto cuboids = fuseBlock(cells, 0.0f, 0.0f);
+    ASSERT_GE(cuboids.size(), SliceIndex::kMinCuboids);
+    const SliceIndex index(cuboids);
+    for (int i = 0; i < kBlockCells; ++i) {
+      const CellKey c = cellOf(BlockKey{}, i);
+      const int found = index.find(cuboids, c.x, c.y, c.z);
+      ASSERT_EQ(found, findCuboid(cuboids, c.x, c.y, c.z));
+      ASSERT_EQ(found >= 0, cells.known.test(i));
+    }
+  }
+}
+
 TEST(Fusion, UniformBlockIsOneCuboid) {
   DenseCells cells;
   cells.log_odds.fill(-2.0f);
