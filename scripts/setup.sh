@@ -7,6 +7,8 @@ packages=(
   libeigen3-dev liboctomap-dev zlib1g-dev libbz2-dev
   nlohmann-json3-dev libspdlog-dev libcli11-dev
   libgtest-dev libgmock-dev libbenchmark-dev
+  libboost-dev libboost-system-dev libssl-dev
+  libprotobuf-dev protobuf-compiler libsqlite3-dev libyaml-cpp-dev
 )
 
 missing=()

@@ -1,0 +1,42 @@
+#pragma once
+/// @file http_client.h
+/// A blocking HTTP/1.1 client on one keep-alive connection (reconnects when
+/// the server closed it). For tools, tests and benchmarks.
+
+#include <chrono>
+#include <map>
+#include <memory>
+#include <string>
+
+namespace rmap::client {
+
+struct HttpResponse {
+  int status = 0;
+  std::string body;
+  std::map<std::string, std::string> headers;  ///< lower-case names
+  std::string header(const std::string& lower_name) const;
+};
+
+class HttpClient {
+ public:
+  /// @param base_url  http://host:port
+  /// @throws ClientError for a bad URL
+  explicit HttpClient(const std::string& base_url, std::string token = {},
+                      std::chrono::milliseconds timeout = std::chrono::milliseconds(10000));
+  ~HttpClient();
+  HttpClient(const HttpClient&) = delete;
+  HttpClient& operator=(const HttpClient&) = delete;
+
+  /// @param target   path and query, e.g. "/v1/maps"
+  /// @param headers  extra request headers
+  /// @throws ClientError on connection failure or timeout (HTTP errors are returned)
+  HttpResponse get(const std::string& target, const std::map<std::string, std::string>& headers = {});
+  HttpResponse post(const std::string& target, const std::string& body, const std::string& content_type,
+                    const std::map<std::string, std::string>& headers = {});
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace rmap::client

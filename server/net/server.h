@@ -1,0 +1,53 @@
+#pragma once
+/// @file server.h
+/// One listening port for HTTP/1.1 (keep-alive) and WebSocket, on a pool of
+/// I/O threads (Boost.Beast on Asio). Requests are parsed with bounded header
+/// and body sizes; malformed or oversize requests get a JSON error response
+/// (see json_error.h) without reaching the Service.
+
+#include <chrono>
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include "net/service.h"
+
+namespace rmap::net {
+
+struct ServerOptions {
+  std::string host = "127.0.0.1";
+  uint16_t port = 8080;  ///< 0 picks a free port (see Server::port)
+  int io_threads = 2;
+  size_t max_header_bytes = 16u << 10;
+  size_t max_body_bytes = 64u << 20;  ///< larger bodies → 413
+  /// A connection idle (no complete request / no frame) this long is closed.
+  std::chrono::seconds idle_timeout{120};
+  /// Further connections are accepted and closed at once.
+  size_t max_connections = 4096;
+};
+
+class Server {
+ public:
+  Server(const ServerOptions& options, Service& service);
+  ~Server();  ///< stops
+  Server(const Server&) = delete;
+  Server& operator=(const Server&) = delete;
+
+  /// Binds, listens and starts the I/O threads.
+  /// @throws std::runtime_error naming the address when binding fails
+  void start();
+  /// Closes the listener and every connection, joins the threads. Idempotent.
+  void stop();
+  /// The bound port (after start).
+  uint16_t port() const;
+  /// Open connections (HTTP and WebSocket).
+  size_t connections() const;
+  /// Open WebSocket connections.
+  size_t webSocketConnections() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace rmap::net

@@ -1,0 +1,143 @@
+#pragma once
+/// @file store.h
+/// Durable state of rmapd in one embedded SQLite database (`<data_dir>/rmap.db`,
+/// WAL journal, synchronous=FULL): the log of accepted robot messages (the
+/// write-ahead log the maps are rebuilt from), maps, robots, trajectories,
+/// events and map snapshots. Knows nothing of the algorithms: payloads are
+/// opaque bytes.
+///
+/// Thread safety: every method may be called from any thread; calls are
+/// serialised on one connection (writes) while reads use their own connection.
+
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <span>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace rmap::store {
+
+/// Any failure of the database (disk full, unwritable directory, corruption).
+class StoreError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct StoreOptions {
+  /// Bytes of page cache per connection.
+  int64_t cache_bytes = 64ll << 20;
+  /// Automatic WAL checkpoint threshold in pages (SQLite's default is 1000).
+  int wal_autocheckpoint_pages = 4000;
+};
+
+/// A robot message to append to the log.
+struct MessageRecord {
+  std::string map;
+  std::string robot_id;
+  uint64_t seq = 0;      ///< robot's sequence number, >= 1
+  int32_t kind = 0;      ///< payload type (the RobotMessage body field number)
+  int64_t received_ns = 0;
+  std::string payload;   ///< serialised message, opaque here
+};
+
+/// Outcome of appending one message.
+struct AppendResult {
+  int64_t id = 0;          ///< log id (global order of application); the stored one for a duplicate
+  bool duplicate = false;  ///< (robot_id, seq) was already in the log; nothing written
+};
+
+/// A message read back from the log.
+struct StoredMessage {
+  int64_t id = 0;
+  MessageRecord record;
+};
+
+struct MapRecord {
+  std::string name;
+  double resolution_m = 0.0;
+  std::string params_json;  ///< map parameters as the app wrote them
+  int64_t created_ns = 0;
+};
+
+struct RobotRecord {
+  std::string robot_id;
+  std::string map;
+  std::string sensors_json;
+  int64_t first_seen_ns = 0;
+  int64_t last_seen_ns = 0;
+  uint64_t last_seq = 0;  ///< highest seq in the log for this robot
+};
+
+/// One pose of a trajectory (map frame).
+struct TrajectoryPose {
+  int64_t stamp_ns = 0;
+  uint64_t seq = 0;          ///< message that produced it
+  double position_m[3] = {0, 0, 0};
+  double orientation_wxyz[4] = {1, 0, 0, 0};
+};
+
+struct EventRecord {
+  int64_t id = 0;
+  std::string map;
+  std::string kind;  ///< e.g. "loop_closure"
+  int64_t stamp_ns = 0;
+  std::string json;  ///< event body
+};
+
+struct Snapshot {
+  std::string map;
+  int64_t last_message_id = 0;  ///< log messages with id <= this are in the blob
+  std::string blob;             ///< map file bytes
+};
+
+class Store {
+ public:
+  /// Opens or creates `<data_dir>/rmap.db` (creating data_dir), checks the
+  /// schema and runs an integrity check of the WAL recovery.
+  /// @throws StoreError with a clear message (e.g. directory not writable)
+  static std::unique_ptr<Store> open(const std::filesystem::path& data_dir, const StoreOptions& options = {});
+  virtual ~Store() = default;
+
+  /// Appends messages in one transaction; they are durable when this returns.
+  /// Duplicates of (robot_id, seq) already stored, or repeated within the
+  /// batch, are reported and not written. Ids increase in batch order.
+  /// @throws StoreError and nothing is written (e.g. disk full)
+  virtual std::vector<AppendResult> append(std::span<const MessageRecord> messages) = 0;
+
+  /// Calls fn for every logged message of `map` (all maps when empty) with
+  /// id > after_id, in id order. fn returns false to stop.
+  virtual void forEachMessage(const std::string& map, int64_t after_id,
+                              const std::function<bool(const StoredMessage&)>& fn) const = 0;
+  virtual uint64_t messageCount() const = 0;
+  /// Highest seq logged for the robot, 0 if none.
+  virtual uint64_t lastSeq(const std::string& robot_id) const = 0;
+
+  /// Creates the map if missing; returns the stored record (the first one wins).
+  virtual MapRecord ensureMap(const MapRecord& map) = 0;
+  virtual std::vector<MapRecord> maps() const = 0;
+
+  /// Inserts or updates the robot (first_seen kept, last_seq never decreases).
+  virtual void upsertRobot(const RobotRecord& robot) = 0;
+  virtual std::vector<RobotRecord> robots() const = 0;
+  virtual std::optional<RobotRecord> robot(const std::string& robot_id) const = 0;
+
+  /// Appends poses of a robot (durable on return).
+  virtual void appendTrajectory(const std::string& robot_id, std::span<const TrajectoryPose> poses) = 0;
+  /// Poses with stamp_ns >= since_ns in time order, at most `limit`.
+  virtual std::vector<TrajectoryPose> trajectory(const std::string& robot_id, int64_t since_ns, size_t limit) const = 0;
+
+  /// Stores an event; returns its id (increasing).
+  virtual int64_t appendEvent(const EventRecord& event) = 0;
+  /// Events with id > after_id (of `map`, or all maps when empty), in id order, at most `limit`.
+  virtual std::vector<EventRecord> events(const std::string& map, int64_t after_id, size_t limit) const = 0;
+
+  /// Replaces the map's snapshot.
+  virtual void putSnapshot(const Snapshot& snapshot) = 0;
+  virtual std::optional<Snapshot> snapshot(const std::string& map) const = 0;
+};
+
+}  // namespace rmap::store
