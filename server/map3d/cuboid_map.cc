@@ -502,6 +502,11 @@ void CuboidMap::forEachBlock(const std::function<void(const BlockView&)>& fn) co
   }
 }
 
+void CuboidMap::forEachBlockVersion(const std::function<void(const BlockKey&, uint64_t)>& fn) const {
+  std::shared_lock lock(mutex_);
+  for (const auto& [key, block] : blocks_) fn(key, block->version);
+}
+
 bool CuboidMap::bounds(CellKey& min, CellKey& max) const {
   bool any = false;
   forEachBlock([&](const BlockView& view) {

@@ -144,6 +144,10 @@ class CuboidMap {
   /// Calls fn for every block in storage form (hot blocks fused on the fly).
   void forEachBlock(const std::function<void(const BlockView&)>& fn) const;
 
+  /// Calls fn(key, version) for every allocated block, cheaply (no fusion):
+  /// to find what changed since a version (tiles, change notices).
+  void forEachBlockVersion(const std::function<void(const BlockKey&, uint64_t version)>& fn) const;
+
   /// Replaces whole blocks (import, loading a file). Cuboids must lie in the
   /// block, not overlap one another and carry finite log-odds within the clamps.
   /// @throws std::invalid_argument naming the first bad block; the map is unchanged then

@@ -360,3 +360,38 @@ TEST(CuboidMap, ReadersRunWhileOneWriterInserts) {
 
 }  // namespace
 }  // namespace rmap::map3d
+
+namespace rmap::map3d {
+namespace {
+
+TEST(CuboidMapBlockVersions, OnlyBlocksTouchedByAScanCarryItsVersion) {
+  CuboidMap map(0.1);
+  const Eigen::Vector3f origin(0.05f, 0.05f, 0.05f);
+  const std::vector<Eigen::Vector3f> near_points{{1.0f, 0.05f, 0.05f}};
+  map.insertScan(origin, near_points);
+  const uint64_t after_first = map.version();
+  size_t blocks_first = 0;
+  map.forEachBlockVersion([&](const BlockKey&, uint64_t v) {
+    EXPECT_LE(v, after_first);
+    ++blocks_first;
+  });
+  ASSERT_GT(blocks_first, 0u);
+
+  // A scan far away (+x 8 m) touches new blocks only, plus the ray's path.
+  const std::vector<Eigen::Vector3f> far_points{{0.05f, 8.0f, 0.05f}};
+  map.insertScan(origin, far_points);
+  std::vector<BlockKey> changed;
+  map.forEachBlockVersion([&](const BlockKey& key, uint64_t v) {
+    if (v > after_first) changed.push_back(key);
+  });
+  ASSERT_FALSE(changed.empty());
+  bool reaches_far_end = false;
+  for (const BlockKey& key : changed) {
+    EXPECT_EQ(key.x, 0);  // the ray runs along +y in the first block column
+    reaches_far_end |= key.y == blockOf(CellKey{0, 80, 0}).y;
+  }
+  EXPECT_TRUE(reaches_far_end);
+}
+
+}  // namespace
+}  // namespace rmap::map3d

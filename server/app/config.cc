@@ -1,0 +1,133 @@
+#include "app/config.h"
+
+#include <yaml-cpp/yaml.h>
+
+#include "map3d/cuboid_map.h"
+
+#include <cmath>
+#include <stdexcept>
+
+namespace rmap::app {
+
+const char* toString(Role role) {
+  switch (role) {
+    case Role::kRobot: return "robot";
+    case Role::kViewer: return "viewer";
+    case Role::kAdmin: return "admin";
+  }
+  return "?";
+}
+
+namespace {
+
+Role parseRole(const std::string& text) {
+  if (text == "robot") return Role::kRobot;
+  if (text == "viewer") return Role::kViewer;
+  if (text == "admin") return Role::kAdmin;
+  throw std::invalid_argument("role must be robot, viewer or admin, not '" + text + "'");
+}
+
+template <typename T>
+void read(const YAML::Node& node, const char* key, T& value) {
+  if (const YAML::Node child = node[key]) value = child.as<T>();
+}
+
+void readAuth(const YAML::Node& node, AuthConfig& auth) {
+  if (!node) return;
+  if (const YAML::Node tokens = node["tokens"]) {
+    auth.tokens.clear();
+    for (const YAML::Node& t : tokens) {
+      TokenConfig token;
+      token.token = t["token"].as<std::string>();
+      token.role = parseRole(t["role"].as<std::string>());
+      read(t, "robot_id", token.robot_id);
+      auth.tokens.push_back(std::move(token));
+    }
+  }
+  if (const YAML::Node origins = node["allowed_origins"]) auth.allowed_origins = origins.as<std::vector<std::string>>();
+}
+
+void readLimits(const YAML::Node& node, LimitsConfig& limits) {
+  if (!node) return;
+  read(node, "max_frame_bytes", limits.max_frame_bytes);
+  read(node, "max_body_bytes", limits.max_body_bytes);
+  read(node, "max_points_per_cloud", limits.max_points_per_cloud);
+  read(node, "max_batch_points", limits.max_batch_points);
+  read(node, "max_in_flight_per_robot", limits.max_in_flight_per_robot);
+  read(node, "max_messages_per_s_per_robot", limits.max_messages_per_s_per_robot);
+  read(node, "viewer_send_queue_bytes", limits.viewer_send_queue_bytes);
+  read(node, "max_box_cuboids", limits.max_box_cuboids);
+}
+
+void readMaps(const YAML::Node& node, MapDefaults& maps) {
+  if (!node) return;
+  read(node, "resolution_m", maps.resolution_m);
+  read(node, "insert_threads", maps.insert_threads);
+  read(node, "max_range_m", maps.occupancy.max_range_m);
+  read(node, "hit_log_odds", maps.occupancy.hit_log_odds);
+  read(node, "miss_log_odds", maps.occupancy.miss_log_odds);
+  read(node, "fusion_tolerance_log_odds", maps.fusion.tolerance_log_odds);
+}
+
+}  // namespace
+
+void loadConfigFile(const std::filesystem::path& file, Config& config) {
+  try {
+    const YAML::Node root = YAML::LoadFile(file.string());
+    if (const YAML::Node listen = root["listen"]) setListenAddress(listen.as<std::string>(), config);
+    if (const YAML::Node dir = root["data_dir"]) config.data_dir = dir.as<std::string>();
+    read(root, "io_threads", config.io_threads);
+    read(root, "snapshot_interval_s", config.snapshot_interval_s);
+    read(root, "viewer_tick_ms", config.viewer_tick_ms);
+    read(root, "log_level", config.log_level);
+    readAuth(root["auth"], config.auth);
+    readLimits(root["limits"], config.limits);
+    readMaps(root["maps"], config.maps);
+  } catch (const std::exception& e) {
+    throw std::runtime_error("config " + file.string() + ": " + e.what());
+  }
+}
+
+void setListenAddress(const std::string& host_port, Config& config) {
+  const size_t colon = host_port.rfind(':');
+  if (colon == std::string::npos || colon == 0 || colon + 1 == host_port.size()) {
+    throw std::invalid_argument("listen address must be HOST:PORT, not '" + host_port + "'");
+  }
+  std::string host = host_port.substr(0, colon);
+  if (host.front() == '[' && host.back() == ']') host = host.substr(1, host.size() - 2);
+  const std::string port_text = host_port.substr(colon + 1);
+  size_t used = 0;
+  int port = -1;
+  try {
+    port = std::stoi(port_text, &used);
+  } catch (const std::exception&) {
+  }
+  if (used != port_text.size() || port < 0 || port > 65535) {
+    throw std::invalid_argument("listen port must be 0..65535, not '" + port_text + "'");
+  }
+  config.listen_host = host;
+  config.listen_port = static_cast<uint16_t>(port);
+}
+
+void validate(const Config& config) {
+  if (config.io_threads < 1) throw std::invalid_argument("io_threads must be >= 1");
+  if (!(config.maps.resolution_m > 0.0) || !std::isfinite(config.maps.resolution_m)) {
+    throw std::invalid_argument("maps.resolution_m must be finite and > 0");
+  }
+  if (config.maps.insert_threads < 1) throw std::invalid_argument("maps.insert_threads must be >= 1");
+  if (!(config.snapshot_interval_s > 0.0)) throw std::invalid_argument("snapshot_interval_s must be > 0");
+  if (config.viewer_tick_ms < 10) throw std::invalid_argument("viewer_tick_ms must be >= 10");
+  if (!(config.limits.max_messages_per_s_per_robot > 0.0)) {
+    throw std::invalid_argument("limits.max_messages_per_s_per_robot must be > 0");
+  }
+  for (const TokenConfig& t : config.auth.tokens) {
+    if (t.token.size() < 8) throw std::invalid_argument("auth tokens must have at least 8 characters");
+    if (t.role == Role::kRobot && t.robot_id.empty()) {
+      throw std::invalid_argument("a robot token needs its robot_id");
+    }
+  }
+  // The map checks its own parameters; building an empty one is cheap.
+  map3d::CuboidMap probe(config.maps.resolution_m, config.maps.occupancy, config.maps.fusion);
+}
+
+}  // namespace rmap::app

@@ -1,0 +1,75 @@
+#pragma once
+/// @file config.h
+/// rmapd's configuration: plain structs with defaults, read from a YAML file
+/// and overridden by command-line flags (see rmapd_main.cc, docs/API.md).
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "map3d/occupancy_params.h"
+
+namespace rmap::app {
+
+enum class Role : uint8_t { kRobot, kViewer, kAdmin };
+const char* toString(Role role);
+
+struct TokenConfig {
+  std::string token;
+  Role role = Role::kViewer;
+  std::string robot_id;  ///< the only robot a robot token may stream as
+};
+
+struct AuthConfig {
+  /// With no tokens the server accepts loopback connections only.
+  std::vector<TokenConfig> tokens;
+  /// Origins allowed on browser WebSockets besides the server's own host.
+  std::vector<std::string> allowed_origins;
+};
+
+struct LimitsConfig {
+  size_t max_frame_bytes = 32u << 20;        ///< robot/viewer WebSocket frames
+  size_t max_body_bytes = 64u << 20;         ///< HTTP request bodies
+  size_t max_points_per_cloud = 2'000'000;
+  size_t max_batch_points = 10'000'000;      ///< occupancy:batch
+  size_t max_in_flight_per_robot = 256;      ///< unacknowledged messages before reading pauses
+  double max_messages_per_s_per_robot = 2000;  ///< beyond: Error "rate_limited", message refused
+  size_t viewer_send_queue_bytes = 4u << 20; ///< a viewer further behind is skipped
+  size_t max_box_cuboids = 100'000;          ///< page size bound of occupancy/box
+};
+
+struct MapDefaults {
+  double resolution_m = 0.1;  ///< for maps created by a Hello without a resolution
+  map3d::OccupancyParams occupancy;
+  map3d::FusionParams fusion;
+  int insert_threads = 1;     ///< threads tracing the rays of one cloud
+};
+
+struct Config {
+  std::string listen_host = "127.0.0.1";
+  uint16_t listen_port = 8080;
+  std::filesystem::path data_dir = "rmap-data";
+  int io_threads = 2;
+  /// Seconds between map snapshots (recovery replays only the log after them).
+  double snapshot_interval_s = 60.0;
+  /// Milliseconds between tile-change scans pushed to viewers.
+  int viewer_tick_ms = 200;
+  AuthConfig auth;
+  LimitsConfig limits;
+  MapDefaults maps;
+  std::string log_level = "info";
+};
+
+/// Reads a YAML config file over `config` (keys absent keep their value).
+/// @throws std::runtime_error naming the file and the bad key or value
+void loadConfigFile(const std::filesystem::path& file, Config& config);
+
+/// Parses "HOST:PORT" (IPv6 in brackets) into the config.
+/// @throws std::invalid_argument for a malformed address
+void setListenAddress(const std::string& host_port, Config& config);
+
+/// @throws std::invalid_argument naming the first bad value
+void validate(const Config& config);
+
+}  // namespace rmap::app

@@ -1,0 +1,221 @@
+#include "app/http_api.h"
+
+#include <spdlog/spdlog.h>
+
+#include <chrono>
+
+#include "net/json_error.h"
+
+namespace rmap::app {
+
+namespace http = boost::beast::http;
+
+namespace {
+
+void requireMethod(const net::Request& request, http::verb verb) {
+  if (request.method() != verb) {
+    throw ApiError(405, "method_not_allowed",
+                   std::string(http::to_string(request.method())) + " is not allowed here; use " +
+                       std::string(http::to_string(verb)));
+  }
+}
+
+nlohmann::json boxJson(const map3d::Grid& grid, const map3d::CellKey& min, const map3d::CellKey& max) {
+  const double r = grid.resolution();
+  return {{"min", {min.x * r, min.y * r, min.z * r}}, {"max", {(max.x + 1) * r, (max.y + 1) * r, (max.z + 1) * r}}};
+}
+
+}  // namespace
+
+nlohmann::json mapJson(const MapWorker& worker) {
+  const map3d::CuboidMap& map = worker.map();
+  const map3d::MapStats stats = map.stats();
+  nlohmann::json out{{"name", worker.name()},
+                     {"resolution_m", map.resolution()},
+                     {"version", stats.version},
+                     {"cuboids", stats.cuboids},
+                     {"blocks", stats.blocks},
+                     {"known_cells", stats.known_cells},
+                     {"occupied_cells", stats.occupied_cells},
+                     {"memory_bytes", stats.memory_bytes},
+                     {"scans", stats.scans},
+                     {"applied_message_id", worker.appliedId()},
+                     {"bounds", nullptr}};
+  map3d::CellKey min, max;
+  if (map.bounds(min, max)) out["bounds"] = boxJson(map.grid(), min, max);
+  return out;
+}
+
+HttpApi::HttpApi(MappingService& service, const Authenticator& auth) : service_(service), auth_(auth) {}
+
+net::Response HttpApi::handle(net::Request& request, const net::Peer& peer) {
+  const auto start = std::chrono::steady_clock::now();
+  Metrics& metrics = service_.metrics();
+  net::Response response;
+  try {
+    const std::string_view raw(request.target().data(), request.target().size());
+    response = route(request, peer, Target::parse(raw));
+  } catch (const ApiError& e) {
+    response = net::jsonError(static_cast<http::status>(e.status()), e.code(), e.what(), request.version(),
+                              request.keep_alive());
+    if (e.status() == 405) response.set(http::field::allow, "GET, POST");
+  } catch (const std::invalid_argument& e) {
+    response = net::jsonError(http::status::bad_request, "invalid_argument", e.what(), request.version(),
+                              request.keep_alive());
+  } catch (const std::exception& e) {
+    spdlog::error("{} {}: {}", std::string(request.method_string()), std::string(request.target()), e.what());
+    response = net::jsonError(http::status::internal_server_error, "internal", e.what(), request.version(),
+                              request.keep_alive());
+  }
+  metrics.http_requests.fetch_add(1, std::memory_order_relaxed);
+  if (response.result_int() >= 400) metrics.http_errors.fetch_add(1, std::memory_order_relaxed);
+  metrics.http_latency.observe(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+  return response;
+}
+
+net::Response HttpApi::route(net::Request& request, const net::Peer& peer, const Target& target) {
+  const std::vector<std::string>& s = target.segments;
+  if (s.size() == 1 && s[0] == "healthz") {
+    requireMethod(request, http::verb::get);
+    return health(request);
+  }
+  if (s.empty()) {
+    requireMethod(request, http::verb::get);
+    return index(request);
+  }
+  const AuthResult auth = auth_.authenticate(request, peer);
+  if (!auth.principal) throw ApiError(auth.status, auth.code, auth.message);
+  if (s.size() == 1 && s[0] == "metrics") {
+    if (auth.principal->role != Role::kAdmin) throw ApiError(403, "permission_denied", "metrics need an admin token");
+    requireMethod(request, http::verb::get);
+    return metrics(request);
+  }
+  if (s.size() < 2 || s[0] != "v1") throw ApiError(404, "not_found", "no such endpoint");
+  if (s[1] == "maps") {
+    if (s.size() == 2) {
+      requireMethod(request, http::verb::get);
+      return listMaps(request);
+    }
+    const std::shared_ptr<MapWorker> map = service_.findMap(s[2]);
+    if (!map) throw ApiError(404, "map_not_found", "no map named '" + s[2] + "'");
+    if (s.size() == 3) {
+      requireMethod(request, http::verb::get);
+      return describeMap(request, *map);
+    }
+    if (s.size() == 4 && s[3] == "occupancy:batch") {
+      requireMethod(request, http::verb::post);
+      return occupancyBatch(request, *map);
+    }
+    requireMethod(request, http::verb::get);
+    if (s.size() == 4 && s[3] == "occupancy") return occupancy(request, target, *map);
+    if (s.size() == 5 && s[3] == "occupancy" && s[4] == "box") return occupancyBox(request, target, *map);
+    if (s.size() == 4 && s[3] == "tileset.json") return tileset(request, *map);
+    if (s.size() == 8 && s[3] == "tiles") return tile(request, target, *map);
+  } else if (s[1] == "robots") {
+    requireMethod(request, http::verb::get);
+    if (s.size() == 2) return listRobots(request);
+    if (s.size() == 3) return describeRobot(request, s[2]);
+    if (s.size() == 4 && s[3] == "trajectory") return trajectory(request, target, s[2]);
+  } else if (s[1] == "loop-closures" && s.size() == 2) {
+    requireMethod(request, http::verb::get);
+    return loopClosures(request, target);
+  }
+  throw ApiError(404, "not_found", "no such endpoint");
+}
+
+net::Response HttpApi::health(const net::Request& request) {
+  return jsonResponse(request, {{"status", "ok"}, {"version", MappingService::version()},
+                                {"maps", service_.maps().size()}});
+}
+
+net::Response HttpApi::metrics(const net::Request& request) {
+  return bodyResponse(request, renderPrometheus(service_.metrics(), service_.gauges()),
+                      "text/plain; version=0.0.4; charset=utf-8");
+}
+
+net::Response HttpApi::index(const net::Request& request) {
+  std::string html =
+      "<!doctype html><html><head><meta charset=\"utf-8\"><title>rmapd</title></head><body>"
+      "<h1>rmapd ";
+  html += MappingService::version();
+  html +=
+      "</h1><p>The 3D viewer is not part of this build yet. The HTTP API: "
+      "<a href=\"/v1/maps\">/v1/maps</a>, <a href=\"/v1/robots\">/v1/robots</a>, "
+      "<a href=\"/healthz\">/healthz</a>, <a href=\"/metrics\">/metrics</a> (docs/API.md).</p></body></html>";
+  return bodyResponse(request, std::move(html), "text/html; charset=utf-8");
+}
+
+net::Response HttpApi::listMaps(const net::Request& request) {
+  nlohmann::json maps = nlohmann::json::array();
+  for (const auto& worker : service_.maps()) maps.push_back(mapJson(*worker));
+  return jsonResponse(request, {{"maps", std::move(maps)}});
+}
+
+net::Response HttpApi::describeMap(const net::Request& request, const MapWorker& map) {
+  return jsonResponse(request, mapJson(map));
+}
+
+namespace {
+
+nlohmann::json robotJson(const RobotStatus& robot) {
+  nlohmann::json out{{"robot_id", robot.record.robot_id},
+                     {"map", robot.record.map},
+                     {"connected", robot.connected},
+                     {"first_seen_ns", robot.record.first_seen_ns},
+                     {"last_seen_ns", robot.record.last_seen_ns},
+                     {"last_seq", robot.record.last_seq},
+                     {"sensors", nlohmann::json::parse(robot.record.sensors_json.empty() ? "[]"
+                                                                                         : robot.record.sensors_json)},
+                     {"pose", nullptr}};
+  if (robot.last_pose) out["pose"] = poseJson(*robot.last_pose);
+  return out;
+}
+
+}  // namespace
+
+net::Response HttpApi::listRobots(const net::Request& request) {
+  nlohmann::json robots = nlohmann::json::array();
+  for (const RobotStatus& robot : service_.robots()) robots.push_back(robotJson(robot));
+  return jsonResponse(request, {{"robots", std::move(robots)}});
+}
+
+net::Response HttpApi::describeRobot(const net::Request& request, const std::string& robot_id) {
+  const std::optional<RobotStatus> robot = service_.robot(robot_id);
+  if (!robot) throw ApiError(404, "robot_not_found", "no robot with id '" + robot_id + "'");
+  return jsonResponse(request, robotJson(*robot));
+}
+
+net::Response HttpApi::trajectory(const net::Request& request, const Target& target, const std::string& robot_id) {
+  if (!service_.robot(robot_id)) throw ApiError(404, "robot_not_found", "no robot with id '" + robot_id + "'");
+  const int64_t since_ns = target.integer("since_ns", INT64_MIN, INT64_MIN, INT64_MAX);
+  const int64_t limit = target.integer("limit", 10000, 1, 1'000'000);
+  nlohmann::json poses = nlohmann::json::array();
+  for (const store::TrajectoryPose& p :
+       service_.store().trajectory(robot_id, since_ns, static_cast<size_t>(limit))) {
+    poses.push_back({{"stamp_ns", p.stamp_ns},
+                     {"seq", p.seq},
+                     {"position", {p.position_m[0], p.position_m[1], p.position_m[2]}},
+                     {"orientation", {p.orientation_wxyz[0], p.orientation_wxyz[1], p.orientation_wxyz[2],
+                                      p.orientation_wxyz[3]}}});
+  }
+  return jsonResponse(request, {{"robot_id", robot_id}, {"poses", std::move(poses)}});
+}
+
+net::Response HttpApi::loopClosures(const net::Request& request, const Target& target) {
+  const std::string map = target.text("map");
+  if (!map.empty() && !service_.findMap(map)) throw ApiError(404, "map_not_found", "no map named '" + map + "'");
+  const int64_t since = target.integer("since", 0, 0, INT64_MAX);
+  const int64_t limit = target.integer("limit", 1000, 1, 100'000);
+  nlohmann::json events = nlohmann::json::array();
+  for (const store::EventRecord& e : service_.store().events(map, since, static_cast<size_t>(limit))) {
+    if (e.kind != "loop_closure") continue;
+    nlohmann::json event = nlohmann::json::parse(e.json);
+    event["id"] = e.id;
+    event["map"] = e.map;
+    event["stamp_ns"] = e.stamp_ns;
+    events.push_back(std::move(event));
+  }
+  return jsonResponse(request, {{"loop_closures", std::move(events)}});
+}
+
+}  // namespace rmap::app

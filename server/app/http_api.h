@@ -1,0 +1,46 @@
+#pragma once
+/// @file http_api.h
+/// The HTTP API (docs/API.md): routes a request to its handler after
+/// authentication, turns ApiError into the JSON error shape and counts
+/// requests. Handlers are thin: the work is done by MappingService, the maps
+/// and the store.
+
+#include "app/auth.h"
+#include "app/http_util.h"
+#include "app/mapping_service.h"
+#include "net/service.h"
+
+namespace rmap::app {
+
+class HttpApi {
+ public:
+  HttpApi(MappingService& service, const Authenticator& auth);
+
+  net::Response handle(net::Request& request, const net::Peer& peer);
+
+ private:
+  net::Response route(net::Request& request, const net::Peer& peer, const Target& target);
+  net::Response health(const net::Request& request);
+  net::Response metrics(const net::Request& request);
+  net::Response index(const net::Request& request);
+  net::Response listMaps(const net::Request& request);
+  net::Response describeMap(const net::Request& request, const MapWorker& map);
+  net::Response listRobots(const net::Request& request);
+  net::Response describeRobot(const net::Request& request, const std::string& robot_id);
+  net::Response trajectory(const net::Request& request, const Target& target, const std::string& robot_id);
+  net::Response loopClosures(const net::Request& request, const Target& target);
+  // Map queries (map_queries.cc).
+  net::Response occupancy(const net::Request& request, const Target& target, const MapWorker& map);
+  net::Response occupancyBatch(const net::Request& request, const MapWorker& map);
+  net::Response occupancyBox(const net::Request& request, const Target& target, const MapWorker& map);
+  net::Response tileset(const net::Request& request, MapWorker& map);
+  net::Response tile(const net::Request& request, const Target& target, MapWorker& map);
+
+  MappingService& service_;
+  const Authenticator& auth_;
+};
+
+/// JSON of a map's description (GET /v1/maps/{map}).
+nlohmann::json mapJson(const MapWorker& map);
+
+}  // namespace rmap::app

@@ -1,0 +1,39 @@
+#pragma once
+/// @file ingest.h
+/// Checking robot messages and turning them into engine input. Pure
+/// functions: used alike by live sessions and by recovery from the log.
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <string>
+#include <vector>
+
+#include "app/config.h"
+#include "rmap/v1/robot_stream.pb.h"
+
+namespace rmap::app {
+
+/// Characters allowed in robot ids and map names: [A-Za-z0-9._-], 1..64.
+bool validName(const std::string& name);
+
+/// Checks a Hello; returns what is wrong, empty when valid.
+std::string checkHello(const v1::Hello& hello);
+
+/// Checks a data message (everything but Hello) against the protocol and the
+/// limits: seq >= 1, a body, finite values, consistent sizes, known encodings.
+/// @return what is wrong, empty when the message is valid
+std::string checkDataMessage(const v1::RobotMessage& message, const LimitsConfig& limits);
+
+/// A pose message as a rigid transform; an all-zero quaternion is identity.
+Eigen::Isometry3d toIsometry(const v1::Pose3& pose);
+
+/// A cloud ready for CuboidMap::insertScan.
+struct CloudInMap {
+  Eigen::Isometry3d sensor_pose = Eigen::Isometry3d::Identity();  ///< map frame
+  std::vector<Eigen::Vector3f> points_m;                           ///< map frame
+};
+
+/// Puts the cloud's points in the map frame (a checked message is assumed).
+CloudInMap cloudInMap(const v1::PointCloud& cloud);
+
+}  // namespace rmap::app

@@ -1,0 +1,95 @@
+#pragma once
+/// @file map_worker.h
+/// One named map and the thread that applies durable robot messages to it in
+/// log order, so a replay of the log rebuilds the same map. Also writes the
+/// map's snapshots and the trajectory poses the messages carry.
+
+#include <chrono>
+#include <condition_variable>
+#include <cstdint>
+#include <deque>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "app/config.h"
+#include "app/metrics.h"
+#include "app/tiles.h"
+#include "map3d/cuboid_map.h"
+#include "rmap/v1/robot_stream.pb.h"
+#include "store/store.h"
+
+namespace rmap::app {
+
+/// A robot pose a message placed in the map.
+struct RobotPose {
+  std::string robot_id;
+  std::string map;
+  uint64_t seq = 0;
+  int64_t stamp_ns = 0;
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+};
+
+class MapWorker {
+ public:
+  using PoseSink = std::function<void(const RobotPose&)>;
+
+  /// @param map            the map (from a snapshot or new)
+  /// @param applied_id     log id already in `map` (the snapshot's), 0 for a new map
+  MapWorker(std::string name, std::unique_ptr<map3d::CuboidMap> map, int64_t applied_id, const Config& config,
+            store::Store& store, Metrics& metrics, PoseSink pose_sink);
+  /// Applies what is queued, writes a final snapshot, joins.
+  ~MapWorker();
+  MapWorker(const MapWorker&) = delete;
+  MapWorker& operator=(const MapWorker&) = delete;
+
+  /// Applies a message synchronously on the caller's thread (recovery, before start()).
+  void applyNow(int64_t log_id, const v1::RobotMessage& message, const std::string& robot_id);
+  /// Starts the apply thread.
+  void start();
+  /// Queues a durable message; `applied` runs on the worker thread afterwards.
+  void post(int64_t log_id, std::shared_ptr<const v1::RobotMessage> message, std::string robot_id,
+            std::function<void()> applied);
+
+  const std::string& name() const { return name_; }
+  const map3d::CuboidMap& map() const { return *map_; }
+  TileIndex& tiles() { return tiles_; }
+  size_t queueDepth() const;
+  int64_t appliedId() const;
+
+ private:
+  struct Item {
+    int64_t log_id;
+    std::shared_ptr<const v1::RobotMessage> message;
+    std::string robot_id;
+    std::function<void()> applied;
+  };
+  void run();
+  void apply(int64_t log_id, const v1::RobotMessage& message, const std::string& robot_id);
+  void flushTrajectories();
+  void writeSnapshot();
+
+  std::string name_;
+  std::unique_ptr<map3d::CuboidMap> map_;
+  const Config& config_;
+  store::Store& store_;
+  Metrics& metrics_;
+  PoseSink pose_sink_;
+  TileIndex tiles_;
+
+  mutable std::mutex mutex_;
+  std::condition_variable wake_;
+  std::deque<Item> queue_;
+  bool stopping_ = false;
+  std::atomic<int64_t> applied_id_{0};
+  int64_t snapshot_id_ = 0;
+  std::chrono::steady_clock::time_point last_snapshot_;
+  std::vector<std::pair<std::string, store::TrajectoryPose>> pending_poses_;
+  std::chrono::steady_clock::time_point last_pose_flush_;
+  std::thread thread_;
+};
+
+}  // namespace rmap::app

@@ -1,0 +1,98 @@
+#include "app/metrics.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+namespace rmap::app {
+
+void LatencyHistogram::observe(double seconds) {
+  const auto bucket = std::lower_bound(kBoundsS.begin(), kBoundsS.end(), seconds) - kBoundsS.begin();
+  buckets_[static_cast<size_t>(bucket)].fetch_add(1, std::memory_order_relaxed);
+  count_.fetch_add(1, std::memory_order_relaxed);
+  sum_ns_.fetch_add(static_cast<uint64_t>(std::max(0.0, seconds) * 1e9), std::memory_order_relaxed);
+}
+
+double LatencyHistogram::quantile(double q) const {
+  const uint64_t total = count_.load(std::memory_order_relaxed);
+  if (total == 0) return 0.0;
+  const auto rank = static_cast<uint64_t>(std::ceil(q * static_cast<double>(total)));
+  uint64_t seen = 0;
+  for (size_t i = 0; i < kBoundsS.size(); ++i) {
+    seen += buckets_[i].load(std::memory_order_relaxed);
+    if (seen >= rank) return kBoundsS[i];
+  }
+  return INFINITY;
+}
+
+void LatencyHistogram::render(const std::string& name, const std::string& help, std::string& out) const {
+  out += "# HELP " + name + " " + help + "\n# TYPE " + name + " histogram\n";
+  uint64_t cumulative = 0;
+  char line[160];
+  for (size_t i = 0; i < kBoundsS.size(); ++i) {
+    cumulative += buckets_[i].load(std::memory_order_relaxed);
+    std::snprintf(line, sizeof line, "%s_bucket{le=\"%g\"} %llu\n", name.c_str(), kBoundsS[i],
+                  static_cast<unsigned long long>(cumulative));
+    out += line;
+  }
+  cumulative += buckets_.back().load(std::memory_order_relaxed);
+  std::snprintf(line, sizeof line, "%s_bucket{le=\"+Inf\"} %llu\n%s_sum %.9f\n%s_count %llu\n", name.c_str(),
+                static_cast<unsigned long long>(cumulative), name.c_str(),
+                static_cast<double>(sum_ns_.load(std::memory_order_relaxed)) * 1e-9, name.c_str(),
+                static_cast<unsigned long long>(count_.load(std::memory_order_relaxed)));
+  out += line;
+}
+
+namespace {
+
+void metric(std::string& out, const char* name, const char* type, const char* help, uint64_t value) {
+  out += std::string("# HELP ") + name + " " + help + "\n# TYPE " + name + " " + type + "\n" + name + " " +
+         std::to_string(value) + "\n";
+}
+
+uint64_t load(const std::atomic<uint64_t>& v) { return v.load(std::memory_order_relaxed); }
+
+}  // namespace
+
+std::string renderPrometheus(const Metrics& m, const MetricsGauges& g) {
+  std::string out;
+  out.reserve(8192);
+  metric(out, "rmap_messages_received_total", "counter", "Robot frames received, valid or not.",
+         load(m.messages_received));
+  metric(out, "rmap_messages_rejected_total", "counter", "Robot messages refused with an error.",
+         load(m.messages_rejected));
+  metric(out, "rmap_messages_acked_total", "counter", "Robot messages acknowledged by this process.",
+         load(m.messages_acked));
+  metric(out, "rmap_messages_duplicate_total", "counter", "Resent messages acknowledged without applying them again.",
+         load(m.messages_duplicate));
+  metric(out, "rmap_messages_durable_total", "counter", "Robot messages held in the store, recovered ones included.",
+         load(m.messages_durable));
+  metric(out, "rmap_messages_recovered_total", "counter", "Messages replayed from the store at start.",
+         load(m.messages_recovered));
+  metric(out, "rmap_points_integrated_total", "counter", "Points integrated into 3D maps.", load(m.points_integrated));
+  metric(out, "rmap_store_failures_total", "counter", "Failed store commits (messages not acknowledged).",
+         load(m.store_failures));
+  metric(out, "rmap_http_requests_total", "counter", "HTTP requests answered.", load(m.http_requests));
+  metric(out, "rmap_http_errors_total", "counter", "HTTP responses with status >= 400.", load(m.http_errors));
+  metric(out, "rmap_viewer_frames_sent_total", "counter", "Frames queued to viewers.", load(m.viewer_frames_sent));
+  metric(out, "rmap_viewer_frames_dropped_total", "counter", "Frames skipped for viewers too far behind.",
+         load(m.viewer_frames_dropped));
+  metric(out, "rmap_snapshots_written_total", "counter", "Map snapshots written to the store.",
+         load(m.snapshots_written));
+  metric(out, "rmap_robot_connections", "gauge", "Open robot streams.", g.robot_connections);
+  metric(out, "rmap_viewer_connections", "gauge", "Open viewer streams.", g.viewer_connections);
+  metric(out, "rmap_http_connections", "gauge", "Open connections (HTTP and WebSocket).", g.http_connections);
+  metric(out, "rmap_commit_queue_messages", "gauge", "Messages waiting to be made durable.", g.commit_queue_messages);
+  metric(out, "rmap_commit_queue_bytes", "gauge", "Bytes waiting to be made durable.", g.commit_queue_bytes);
+  metric(out, "rmap_map_queue_messages", "gauge", "Durable messages waiting to be applied to maps.",
+         g.map_queue_messages);
+  metric(out, "rmap_maps", "gauge", "Maps held.", g.maps);
+  metric(out, "rmap_map_cuboids", "gauge", "Cuboids over all maps.", g.cuboids);
+  metric(out, "rmap_map_memory_bytes", "gauge", "Bytes held by all maps.", g.map_memory_bytes);
+  m.ack_latency.render("rmap_ack_latency_seconds", "From a robot frame's arrival to its acknowledgement.", out);
+  m.apply_latency.render("rmap_apply_latency_seconds", "Time to apply one message to its map.", out);
+  m.http_latency.render("rmap_http_request_seconds", "Time to answer an HTTP request.", out);
+  return out;
+}
+
+}  // namespace rmap::app

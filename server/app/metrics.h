@@ -1,0 +1,64 @@
+#pragma once
+/// @file metrics.h
+/// Counters and latency histograms of rmapd, rendered in the Prometheus text
+/// exposition format by GET /metrics. Lock-free to update from any thread.
+
+#include <array>
+#include <atomic>
+#include <cstdint>
+#include <string>
+
+namespace rmap::app {
+
+/// Cumulative histogram with fixed bucket bounds in seconds.
+class LatencyHistogram {
+ public:
+  static constexpr std::array<double, 14> kBoundsS = {0.0005, 0.001, 0.0025, 0.005, 0.01, 0.025, 0.05,
+                                                      0.1,    0.25,  0.5,    1.0,   2.5,  5.0,  10.0};
+  void observe(double seconds);
+  /// Appends the `_bucket`, `_sum` and `_count` lines of `name`.
+  void render(const std::string& name, const std::string& help, std::string& out) const;
+  /// Quantile estimate (upper bucket bound), seconds; 0 when empty.
+  double quantile(double q) const;
+
+ private:
+  std::array<std::atomic<uint64_t>, kBoundsS.size() + 1> buckets_{};
+  std::atomic<uint64_t> count_{0};
+  std::atomic<uint64_t> sum_ns_{0};
+};
+
+struct Metrics {
+  std::atomic<uint64_t> messages_received{0};   ///< frames from robots, valid or not
+  std::atomic<uint64_t> messages_rejected{0};   ///< refused with an Error
+  std::atomic<uint64_t> messages_acked{0};      ///< acknowledged by this process (duplicates included)
+  std::atomic<uint64_t> messages_duplicate{0};
+  std::atomic<uint64_t> messages_durable{0};    ///< held in the store (recovered ones included)
+  std::atomic<uint64_t> messages_recovered{0};  ///< replayed from the store at start
+  std::atomic<uint64_t> points_integrated{0};
+  std::atomic<uint64_t> store_failures{0};
+  std::atomic<uint64_t> http_requests{0};
+  std::atomic<uint64_t> http_errors{0};         ///< responses with status >= 400
+  std::atomic<uint64_t> viewer_frames_sent{0};
+  std::atomic<uint64_t> viewer_frames_dropped{0};
+  std::atomic<uint64_t> snapshots_written{0};
+  LatencyHistogram ack_latency;      ///< frame received → ack queued
+  LatencyHistogram apply_latency;    ///< one message applied to its map
+  LatencyHistogram http_latency;
+};
+
+/// Gauges read at scrape time.
+struct MetricsGauges {
+  uint64_t robot_connections = 0;
+  uint64_t viewer_connections = 0;
+  uint64_t http_connections = 0;
+  uint64_t commit_queue_messages = 0;
+  uint64_t commit_queue_bytes = 0;
+  uint64_t map_queue_messages = 0;
+  uint64_t maps = 0;
+  uint64_t cuboids = 0;
+  uint64_t map_memory_bytes = 0;
+};
+
+std::string renderPrometheus(const Metrics& metrics, const MetricsGauges& gauges);
+
+}  // namespace rmap::app

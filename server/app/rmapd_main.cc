@@ -1,0 +1,90 @@
+// rmapd: the mapping server. One process, one port: robots stream over
+// WebSocket, browsers and programs read over HTTP (docs/API.md).
+#include <CLI/CLI.hpp>
+#include <spdlog/spdlog.h>
+
+#include <csignal>
+#include <iostream>
+
+#include "app/config.h"
+#include "app/mapping_service.h"
+#include "app/rmapd_service.h"
+#include "net/server.h"
+
+namespace {
+
+/// Waits for SIGINT/SIGTERM on the main thread (blocked everywhere else).
+int waitForStopSignal() {
+  sigset_t signals;
+  sigemptyset(&signals);
+  sigaddset(&signals, SIGINT);
+  sigaddset(&signals, SIGTERM);
+  int received = 0;
+  sigwait(&signals, &received);
+  return received;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App cli{"rmapd — networked 3D mapping server"};
+  std::string listen;
+  std::string data_dir;
+  std::string config_file;
+  std::string log_level;
+  int io_threads = 0;
+  cli.add_option("--listen", listen, "HOST:PORT to serve HTTP and WebSocket on (default 127.0.0.1:8080)");
+  cli.add_option("--data-dir", data_dir, "directory of the store (default ./rmap-data)");
+  cli.add_option("--config", config_file, "YAML configuration file")->check(CLI::ExistingFile);
+  cli.add_option("--log-level", log_level, "trace, debug, info, warn, error")
+      ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error"}));
+  cli.add_option("--io-threads", io_threads, "network threads")->check(CLI::PositiveNumber);
+  CLI11_PARSE(cli, argc, argv);
+
+  rmap::app::Config config;
+  try {
+    if (!config_file.empty()) rmap::app::loadConfigFile(config_file, config);
+    if (!listen.empty()) rmap::app::setListenAddress(listen, config);
+    if (!data_dir.empty()) config.data_dir = data_dir;
+    if (!log_level.empty()) config.log_level = log_level;
+    if (io_threads > 0) config.io_threads = io_threads;
+    rmap::app::validate(config);
+  } catch (const std::exception& e) {
+    std::cerr << "rmapd: " << e.what() << "\n";
+    return 2;
+  }
+  spdlog::set_level(spdlog::level::from_str(config.log_level));
+
+  // Block the stop signals before any thread starts so only sigwait sees them.
+  sigset_t signals;
+  sigemptyset(&signals);
+  sigaddset(&signals, SIGINT);
+  sigaddset(&signals, SIGTERM);
+  pthread_sigmask(SIG_BLOCK, &signals, nullptr);
+  std::signal(SIGPIPE, SIG_IGN);
+
+  try {
+    rmap::app::MappingService service(config);
+    rmap::app::RmapdService handlers(service);
+    rmap::net::ServerOptions options;
+    options.host = config.listen_host;
+    options.port = config.listen_port;
+    options.io_threads = config.io_threads;
+    options.max_body_bytes = config.limits.max_body_bytes;
+    rmap::net::Server server(options, handlers);
+    server.start();
+    const std::string host = config.listen_host.find(':') != std::string::npos ? "[" + config.listen_host + "]"
+                                                                                 : config.listen_host;
+    spdlog::info("rmapd {} listening on http://{}:{}/ (data in {}{})", rmap::app::MappingService::version(), host,
+                 server.port(), config.data_dir.string(),
+                 config.auth.tokens.empty() ? ", loopback clients only" : "");
+    std::cout << "rmapd listening on http://" << host << ":" << server.port() << "/" << std::endl;
+    const int signal = waitForStopSignal();
+    spdlog::info("signal {}: stopping", signal);
+    server.stop();
+  } catch (const std::exception& e) {
+    spdlog::critical("{}", e.what());
+    return 1;
+  }
+  return 0;
+}
