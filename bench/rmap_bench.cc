@@ -4,6 +4,7 @@
 #include <iostream>
 
 #include "map3d/map3d_bench.h"
+#include "server/server_bench.h"
 
 int main(int argc, char** argv) {
   CLI::App app{"rmap-bench: rmap against its anchors (OctoMap, ...) in one process; prints ratios, writes JSON"};
@@ -36,9 +37,24 @@ int main(int argc, char** argv) {
   m->add_option("--sim-sensor-height", map3d.sim.sensor_height_m, "simulated lidar height above the floor, metres")
       ->check(CLI::PositiveNumber);
 
+  rmap::bench::ServerBenchOptions server;
+  CLI::App* s = app.add_subcommand("server", "rmapd over loopback: simulated robots streaming, HTTP queries");
+  s->add_option("--robots", server.robots, "simulated robots streaming at once")->check(CLI::Range(1, 1024));
+  s->add_flag("--shared-map", server.shared_map, "all robots on one map (default: one map each)");
+  s->add_option("--resolution", server.resolution_m, "map resolution, metres")->check(CLI::PositiveNumber);
+  s->add_option("--phase-seconds", server.phase_s, "length of each timed phase")->check(CLI::PositiveNumber);
+  s->add_option("--lidar-rings", server.lidar_rings, "simulated lidar rings")->check(CLI::Range(1, 1024));
+  s->add_option("--lidar-columns", server.lidar_columns, "simulated lidar columns")->check(CLI::Range(1, 16384));
+  s->add_option("--query-connections", server.query_connections, "keep-alive connections for point queries")
+      ->check(CLI::Range(1, 256));
+  s->add_option("--batch-points", server.batch_points, "points per batch query")->check(CLI::Range(1, 10000000));
+  s->add_option("--insert-threads", server.insert_threads, "threads tracing one cloud")->check(CLI::Range(1, 64));
+  s->add_option("--json", server.json_out, "write results as JSON to this file");
+
   CLI11_PARSE(app, argc, argv);
   try {
     if (m->parsed()) return rmap::bench::runMap3dBench(map3d);
+    if (s->parsed()) return rmap::bench::runServerBench(server);
   } catch (const std::exception& e) {
     std::cerr << "rmap-bench: " << e.what() << std::endl;
     return 1;

@@ -1,5 +1,7 @@
 #include "map3d/map3d_bench.h"
 
+#include "common/machine.h"
+
 #include <chrono>
 #include <fstream>
 #include <iostream>
@@ -244,15 +246,6 @@ json compareOnce(const BenchDataset& data, const Map3dBenchOptions& o, const map
   return out;
 }
 
-std::string cpuModel() {
-  std::ifstream in("/proc/cpuinfo");
-  std::string line;
-  while (std::getline(in, line)) {
-    if (line.rfind("model name", 0) == 0) return line.substr(line.find(':') + 2);
-  }
-  return "unknown";
-}
-
 void printRow(const std::string& model, const json& r) {
   std::cout << model << ": rmap " << r["rmap"]["insert_s"].get<double>() << " s, " << r["rmap"]["cuboids"]
             << " cuboids, " << r["rmap"]["memory_bytes"] << " B | octomap " << r["octomap"]["insert_s"].get<double>()
@@ -299,7 +292,7 @@ int runMap3dBench(const Map3dBenchOptions& o) {
                  {"fuse_after_scans", fusion.fuse_after_scans},
                  {"max_range_m", o.max_range_m},
                  {"free_space", exact_walks ? "exact" : "stop-at-freed"},
-                 {"machine", {{"cpu", cpuModel()}, {"hardware_threads", std::thread::hardware_concurrency()}}}};
+                 {"machine", machineJson()}};
   std::cout << data.name << " at " << o.resolution_m << " m, " << data.scans.size() << " scans, " << points
             << " points, " << o.threads << " thread(s), fusion tolerance " << fusion.tolerance_log_odds << std::endl;
 

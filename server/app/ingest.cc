@@ -158,7 +158,7 @@ CloudInMap cloudInMap(const v1::PointCloud& cloud) {
   out.points_m.resize(n);
   // Eigen::Vector3f is three packed floats, the wire layout of xyz_m.
   static_assert(sizeof(Eigen::Vector3f) == 3 * sizeof(float));
-  std::memcpy(out.points_m.data(), cloud.xyz_m().data(), n * sizeof(Eigen::Vector3f));
+  if (n > 0) std::memcpy(out.points_m.front().data(), cloud.xyz_m().data(), n * sizeof(Eigen::Vector3f));
   if (cloud.frame() == v1::PointCloud::SENSOR) {
     const Eigen::Isometry3f pose = out.sensor_pose.cast<float>();
     for (Eigen::Vector3f& p : out.points_m) p = pose * p;

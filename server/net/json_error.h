@@ -8,8 +8,9 @@
 
 namespace rmap::net {
 
-/// A JSON error response with the given status; keep-alive follows `request`
-/// when given.
+/// A JSON error response with the given status, HTTP version and keep-alive;
+/// Content-Type application/json, Content-Length set. Invalid UTF-8 in
+/// `message` is replaced (U+FFFD) rather than rejected.
 Response jsonError(boost::beast::http::status status, const std::string& code, const std::string& message,
                    unsigned http_version = 11, bool keep_alive = false);
 

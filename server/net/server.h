@@ -21,6 +21,9 @@ struct ServerOptions {
   size_t max_header_bytes = 16u << 10;
   size_t max_body_bytes = 64u << 20;  ///< larger bodies → 413
   /// A connection idle (no complete request / no frame) this long is closed.
+  /// HTTP: each read or write must complete within it. WebSocket: the server
+  /// pings after half of it, and closes when nothing (not even the pong)
+  /// arrived for all of it.
   std::chrono::seconds idle_timeout{120};
   /// Further connections are accepted and closed at once.
   size_t max_connections = 4096;
@@ -33,10 +36,14 @@ class Server {
   Server(const Server&) = delete;
   Server& operator=(const Server&) = delete;
 
-  /// Binds, listens and starts the I/O threads.
+  /// Binds, listens and starts the I/O threads (at least one).
   /// @throws std::runtime_error naming the address when binding fails
+  /// @throws std::logic_error when called after a successful start or a stop
+  ///         (a Server runs once)
   void start();
   /// Closes the listener and every connection, joins the threads. Idempotent.
+  /// Not from an I/O thread (it joins them). WebSocket handlers get onClose;
+  /// WsConnections they still hold refuse sends from then on.
   void stop();
   /// The bound port (after start).
   uint16_t port() const;

@@ -30,6 +30,7 @@ class GroupCommitter {
  public:
   /// Called on the writer thread after the batch holding the message
   /// committed (error == nullptr) or failed (error set, nothing written).
+  /// It must not throw, and should be quick: the next batch waits for it.
   using Completion = std::function<void(const AppendResult& result, std::exception_ptr error)>;
 
   GroupCommitter(Store& store, const GroupCommitOptions& options = {});

@@ -32,6 +32,10 @@ struct StoreOptions {
   int64_t cache_bytes = 64ll << 20;
   /// Automatic WAL checkpoint threshold in pages (SQLite's default is 1000).
   int wal_autocheckpoint_pages = 4000;
+  /// Largest size of the database file in bytes, 0 for no limit. A write that
+  /// would grow the file beyond fails with StoreError ("database or disk is
+  /// full") and changes nothing, as when the disk itself fills up.
+  int64_t max_database_bytes = 0;
 };
 
 /// A robot message to append to the log.

@@ -12,6 +12,7 @@
 #include <functional>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -52,7 +53,10 @@ class RobotClient {
   RobotClient(const RobotClient&) = delete;
   RobotClient& operator=(const RobotClient&) = delete;
 
-  /// Callbacks run on the reader thread; set them before connect().
+  /// Callbacks run on the reader thread; set them before connect(). They run
+  /// before the message counts as answered (so waitAllAcked() returning true
+  /// means every callback of those messages has run) and must not call
+  /// send(), waitAllAcked() or close(): those wait for the reader thread.
   void onAck(AckCallback callback);
   void onPose(PoseCallback callback);
   void onError(ErrorCallback callback);

@@ -17,6 +17,14 @@
 
 namespace rmap::client {
 
+/// Totals so far, for progress reports.
+struct SimFeedProgress {
+  double elapsed_s = 0.0;
+  uint64_t clouds_sent = 0;
+  uint64_t clouds_acked = 0;
+  uint64_t points_acked = 0;
+};
+
 struct SimFeedOptions {
   std::string server_url = "ws://127.0.0.1:8080";
   std::string token;
@@ -40,6 +48,15 @@ struct SimFeedOptions {
   /// Lidar: beams per ring and rings.
   int lidar_columns = 360;
   int lidar_rings = 16;
+  /// Benchmark mode: when > 0 each robot simulates at most this many distinct
+  /// clouds (lazily, the first time it needs each) and then cycles over them
+  /// with fresh stamps, so a fast feed (rate_hz 0) measures the server rather
+  /// than the lidar simulator. 0 = every cloud is simulated at its own pose.
+  size_t precompute_clouds = 0;
+  /// Per robot: connect, each flow-controlled send, and the final wait for acks.
+  std::chrono::milliseconds timeout{10000};
+  /// Called about once per second on runSimFeed's thread while robots run; may be empty.
+  std::function<void(const SimFeedProgress&)> on_progress;
 };
 
 /// Per-robot and total figures of a run.
@@ -60,7 +77,9 @@ struct SimScene {
 SimScene makeSimScene(uint64_t seed, double voxel_m = 0.1);
 
 /// Runs the feed: one thread per robot; returns when every robot stopped and
-/// its messages were acknowledged (or failed).
+/// its messages were acknowledged (or failed). Robot failures (connection,
+/// Error replies, missing acks) land in SimFeedResult::errors.
+/// @throws std::invalid_argument for bad options (robots < 1, rate_hz < 0, bad lidar or poses)
 SimFeedResult runSimFeed(const SimScene& scene, const SimFeedOptions& options);
 
 }  // namespace rmap::client

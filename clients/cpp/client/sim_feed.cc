@@ -1,0 +1,262 @@
+// SimFeed: simulated lidar robots streaming clouds through RobotClient.
+
+#include "client/sim_feed.h"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <condition_variable>
+#include <mutex>
+#include <random>
+#include <stdexcept>
+#include <thread>
+#include <unordered_map>
+
+#include "client/robot_client.h"
+#include "sim/trajectory.h"
+
+namespace rmap::client {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+constexpr double kSensorHeight_m = 1.3;  ///< a lidar on a ground robot
+constexpr double kLidarMaxRange_m = 20.0;
+constexpr double kLidarFov_deg = 15.0;   ///< ± elevation, as a 16-ring spinning lidar
+constexpr const char* kLidarName = "lidar";
+constexpr const char* kLidarModel = "sim-lidar-16";
+
+sim::LidarModel lidarModel(const SimFeedOptions& o) {
+  sim::LidarModel model;
+  model.rings = o.lidar_rings;
+  model.columns = o.lidar_columns;
+  model.fov_up_deg = kLidarFov_deg;
+  model.fov_down_deg = -kLidarFov_deg;
+  model.max_range_m = kLidarMaxRange_m;
+  return model;
+}
+
+sim::TrajectoryOptions trajectoryOptions(const SimFeedOptions& o) {
+  sim::TrajectoryOptions t;
+  t.sensor_height_m = kSensorHeight_m;
+  t.num_poses = o.poses;
+  return t;
+}
+
+rmap::v1::Hello makeHello(const SimFeedOptions& o, int robot) {
+  rmap::v1::Hello hello;
+  hello.set_robot_id(o.robot_prefix + "-" + std::to_string(robot));
+  hello.set_map(o.shared_map ? o.map_prefix : o.map_prefix + "-" + std::to_string(robot));
+  hello.set_resolution_m(o.resolution_m);
+  rmap::v1::SensorDescription* lidar = hello.add_sensors();
+  lidar->set_name(kLidarName);
+  lidar->set_kind(rmap::v1::SensorDescription::LIDAR_3D);
+  lidar->set_model(kLidarModel);
+  lidar->mutable_mount()->mutable_orientation()->set_w(1.0);  // the clouds are in the map frame anyway
+  return hello;
+}
+
+/// One scan at `pose` as a map-frame cloud (stamp left for send time).
+rmap::v1::RobotMessage makeCloud(const sim::VoxelWorld& world, const Eigen::Isometry3d& pose,
+                                 const sim::LidarModel& model, std::mt19937_64& rng) {
+  const sim::LidarScan scan = sim::simulateLidar(world, pose, model, rng);
+  rmap::v1::RobotMessage message;
+  rmap::v1::PointCloud& cloud = *message.mutable_cloud();
+  cloud.set_sensor(kLidarName);
+  cloud.set_frame(rmap::v1::PointCloud::MAP);
+  rmap::v1::Pose3& sensor_pose = *cloud.mutable_sensor_pose();
+  const Eigen::Vector3d p = pose.translation();
+  sensor_pose.mutable_position_m()->set_x(p.x());
+  sensor_pose.mutable_position_m()->set_y(p.y());
+  sensor_pose.mutable_position_m()->set_z(p.z());
+  const Eigen::Quaterniond q(pose.rotation());
+  sensor_pose.mutable_orientation()->set_w(q.w());
+  sensor_pose.mutable_orientation()->set_x(q.x());
+  sensor_pose.mutable_orientation()->set_y(q.y());
+  sensor_pose.mutable_orientation()->set_z(q.z());
+  auto& xyz = *cloud.mutable_xyz_m();
+  xyz.Reserve(static_cast<int>(3 * scan.points_m.size()));
+  for (const Eigen::Vector3f& point : scan.points_m) {
+    xyz.Add(point.x());
+    xyz.Add(point.y());
+    xyz.Add(point.z());
+  }
+  cloud.mutable_intensities()->Add(scan.intensities.begin(), scan.intensities.end());
+  return message;
+}
+
+int64_t wallClockNs() {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
+/// What the robot threads share.
+struct Totals {
+  std::atomic<uint64_t> clouds_sent{0};
+  std::atomic<uint64_t> clouds_acked{0};
+  std::atomic<uint64_t> points_sent{0};
+  std::atomic<uint64_t> points_acked{0};
+  std::mutex mutex;  ///< guards the vectors
+  std::vector<double> ack_latencies_ms;
+  std::vector<std::string> errors;
+
+  void addError(std::string error) {
+    std::lock_guard lock(mutex);
+    errors.push_back(std::move(error));
+  }
+};
+
+/// One robot from Hello to its last ack; never throws (failures go to totals.errors).
+void runRobot(const SimScene& scene, const SimFeedOptions& o, int index, Clock::time_point end, Totals& totals) {
+  RobotClientOptions client_options;
+  client_options.server_url = o.server_url;
+  client_options.token = o.token;
+  client_options.hello = makeHello(o, index);
+  client_options.max_in_flight = o.max_in_flight;
+  client_options.timeout = o.timeout;
+  const std::string robot_id = client_options.hello.robot_id();
+
+  std::vector<double> latencies_ms;
+  std::mutex points_mutex;
+  std::unordered_map<uint64_t, uint64_t> points_by_seq;  ///< clouds in flight
+  try {
+    RobotClient client(client_options);
+    // Callbacks run on the client's I/O thread.
+    client.onAck([&](const rmap::v1::Ack& ack, std::chrono::nanoseconds latency) {
+      uint64_t points = 0;
+      {
+        std::lock_guard lock(points_mutex);
+        if (const auto it = points_by_seq.find(ack.seq()); it != points_by_seq.end()) {
+          points = it->second;
+          points_by_seq.erase(it);
+        }
+        latencies_ms.push_back(std::chrono::duration<double, std::milli>(latency).count());
+      }
+      totals.clouds_acked.fetch_add(1, std::memory_order_relaxed);
+      totals.points_acked.fetch_add(points, std::memory_order_relaxed);
+    });
+    client.onError([&](const rmap::v1::Error& error) {
+      {
+        std::lock_guard lock(points_mutex);
+        points_by_seq.erase(error.seq());  // answered, though refused
+      }
+      totals.addError(robot_id + ": seq " + std::to_string(error.seq()) + ": " + error.code() + ": " +
+                      error.message() + (error.fatal() ? " (fatal)" : ""));
+    });
+
+    const std::vector<Eigen::Isometry3d> poses =
+        sim::planTrajectory(scene.world, trajectoryOptions(o), o.seed + static_cast<uint64_t>(index));
+    const sim::LidarModel model = lidarModel(o);
+    std::seed_seq seeds{o.seed, static_cast<uint64_t>(index)};
+    std::mt19937_64 rng(seeds);
+    std::vector<rmap::v1::RobotMessage> cache;
+
+    // A single sender: sequence numbers follow Welcome::last_durable_seq one by one,
+    // so each cloud's point count is filed before its ack can arrive.
+    uint64_t next_seq = client.connect().last_durable_seq() + 1;
+    const auto period = o.rate_hz > 0 ? std::chrono::duration_cast<Clock::duration>(
+                                            std::chrono::duration<double>(1.0 / o.rate_hz))
+                                      : Clock::duration::zero();
+    Clock::time_point due = Clock::now();
+    for (uint64_t k = 0; o.max_clouds == 0 || k < o.max_clouds; ++k) {
+      if (due >= end || Clock::now() >= end) break;
+      std::this_thread::sleep_until(due);
+      rmap::v1::RobotMessage message;
+      if (o.precompute_clouds == 0) {
+        message = makeCloud(scene.world, poses[k % poses.size()], model, rng);
+      } else {
+        if (k < o.precompute_clouds) cache.push_back(makeCloud(scene.world, poses[k % poses.size()], model, rng));
+        message = cache[k % o.precompute_clouds];
+      }
+      message.mutable_cloud()->set_stamp_ns(wallClockNs());
+      const uint64_t points = static_cast<uint64_t>(message.cloud().xyz_m_size() / 3);
+      {
+        std::lock_guard lock(points_mutex);
+        points_by_seq[next_seq] = points;
+      }
+      const uint64_t seq = client.send(std::move(message));
+      if (seq != next_seq) throw std::logic_error("sequence numbers skipped: sent " + std::to_string(seq));
+      ++next_seq;
+      totals.clouds_sent.fetch_add(1, std::memory_order_relaxed);
+      totals.points_sent.fetch_add(points, std::memory_order_relaxed);
+      // No catch-up bursts after a slow spell: the schedule restarts from now.
+      due = std::max(due + period, Clock::now());
+    }
+    if (!client.waitAllAcked(o.timeout)) {
+      size_t unanswered = 0;
+      {
+        std::lock_guard lock(points_mutex);
+        unanswered = points_by_seq.size();
+      }
+      totals.addError(robot_id + ": " + std::to_string(unanswered) + " clouds unacknowledged at the end (" +
+                      (client.connected() ? "timed out after " + std::to_string(o.timeout.count()) + " ms"
+                                          : std::string("connection closed")) + ")");
+    }
+    client.close();
+  } catch (const std::exception& e) {
+    totals.addError(robot_id + ": " + e.what());
+  }
+  // The client and its I/O thread are gone: no callback touches latencies_ms any more.
+  std::lock_guard lock(totals.mutex);
+  totals.ack_latencies_ms.insert(totals.ack_latencies_ms.end(), latencies_ms.begin(), latencies_ms.end());
+}
+
+}  // namespace
+
+SimScene makeSimScene(uint64_t seed, double voxel_m) {
+  sim::BuildingOptions options;
+  options.voxel_m = voxel_m;
+  options.floors = 2;  // stairs give the robots a second level to map
+  sim::BuildingLayout layout;
+  sim::VoxelWorld world = sim::makeBuilding(options, seed, &layout);
+  return SimScene{std::move(world), std::move(layout)};
+}
+
+SimFeedResult runSimFeed(const SimScene& scene, const SimFeedOptions& options) {
+  if (options.robots < 1) throw std::invalid_argument("robots must be at least 1");
+  if (!(options.rate_hz >= 0.0) || !std::isfinite(options.rate_hz)) {
+    throw std::invalid_argument("rate_hz must be finite and >= 0");
+  }
+  lidarModel(options).validate();
+  trajectoryOptions(options).validate();
+
+  Totals totals;
+  const Clock::time_point start = Clock::now();
+  const Clock::time_point end = start + options.duration;
+  std::mutex mutex;
+  std::condition_variable cv;
+  int running = options.robots;
+  std::vector<std::thread> threads;
+  threads.reserve(static_cast<size_t>(options.robots));
+  for (int i = 0; i < options.robots; ++i) {
+    threads.emplace_back([&, i] {
+      runRobot(scene, options, i, end, totals);
+      std::lock_guard lock(mutex);
+      --running;
+      cv.notify_all();
+    });
+  }
+  const auto elapsed_s = [&start] { return std::chrono::duration<double>(Clock::now() - start).count(); };
+  {
+    std::unique_lock lock(mutex);
+    while (!cv.wait_for(lock, std::chrono::seconds(1), [&running] { return running == 0; })) {
+      if (!options.on_progress) continue;
+      lock.unlock();
+      options.on_progress({elapsed_s(), totals.clouds_sent.load(), totals.clouds_acked.load(),
+                           totals.points_acked.load()});
+      lock.lock();
+    }
+  }
+  for (std::thread& thread : threads) thread.join();
+
+  SimFeedResult result;
+  result.wall_s = elapsed_s();
+  result.clouds_sent = totals.clouds_sent.load();
+  result.clouds_acked = totals.clouds_acked.load();
+  result.points_sent = totals.points_sent.load();
+  result.ack_latencies_ms = std::move(totals.ack_latencies_ms);
+  result.errors = std::move(totals.errors);
+  return result;
+}
+
+}  // namespace rmap::client
