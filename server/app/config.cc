@@ -5,6 +5,7 @@
 #include "map3d/cuboid_map.h"
 
 #include <cmath>
+#include <set>
 #include <stdexcept>
 
 namespace rmap::app {
@@ -111,6 +112,11 @@ void setListenAddress(const std::string& host_port, Config& config) {
 
 void validate(const Config& config) {
   if (config.io_threads < 1) throw std::invalid_argument("io_threads must be >= 1");
+  static const std::set<std::string> kLogLevels{"trace", "debug", "info", "warn", "error", "critical", "off"};
+  if (!kLogLevels.contains(config.log_level)) {
+    throw std::invalid_argument("log_level must be one of trace, debug, info, warn, error, critical, off (got \"" +
+                                config.log_level + "\")");
+  }
   if (!(config.maps.resolution_m > 0.0) || !std::isfinite(config.maps.resolution_m)) {
     throw std::invalid_argument("maps.resolution_m must be finite and > 0");
   }

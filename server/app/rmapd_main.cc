@@ -1,6 +1,7 @@
 // rmapd: the mapping server. One process, one port: robots stream over
 // WebSocket, browsers and programs read over HTTP (docs/API.md).
 #include <CLI/CLI.hpp>
+#include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
 #include <csignal>
@@ -53,6 +54,8 @@ int main(int argc, char** argv) {
     std::cerr << "rmapd: " << e.what() << "\n";
     return 2;
   }
+  // Logs go to stderr: stdout carries only the machine-readable "listening on" line.
+  spdlog::set_default_logger(spdlog::stderr_color_mt("rmapd"));
   spdlog::set_level(spdlog::level::from_str(config.log_level));
 
   // Block the stop signals before any thread starts so only sigwait sees them.

@@ -73,8 +73,10 @@ RmapdProcess::RmapdProcess(const fs::path& data_dir, const std::string& config_y
   close(out[0]);
   const size_t colon = line.rfind(':');
   if (line.find("listening on") == std::string::npos || colon == std::string::npos) {
+    const bool exited = !running();
     kill9();
-    throw std::runtime_error("rmapd did not start; its log:\n" + log());
+    throw std::runtime_error(std::string("rmapd did not start (") + (exited ? "it exited" : "no port line in time") +
+                             "; stdout: " + line + "); its log:\n" + log());
   }
   port_ = static_cast<uint16_t>(std::stoi(line.substr(colon + 1)));
 }

@@ -55,7 +55,13 @@ TEST(StreamTruth, ConcurrentRobotsBuildMapsThatMatchTheSimulatedWorld) {
   const nlohmann::json robots = getJson(http, "/v1/robots");
   ASSERT_EQ(robots["robots"].size(), 5u);
   for (const auto& r : robots["robots"]) EXPECT_EQ(r["last_seq"].get<uint64_t>(), 10u) << r.dump();
-  const nlohmann::json trajectory = getJson(http, "/v1/robots/sim-robot-1/trajectory");
+  // Poses reach the store within the map worker's flush period (0.5 s).
+  nlohmann::json trajectory;
+  for (int attempt = 0; attempt < 50; ++attempt) {
+    trajectory = getJson(http, "/v1/robots/sim-robot-1/trajectory");
+    if (trajectory["poses"].size() == 10u) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
   EXPECT_EQ(trajectory["poses"].size(), 10u);
 
   // Query every 3rd cell centre of the building at the map resolution and
@@ -74,24 +80,37 @@ TEST(StreamTruth, ConcurrentRobotsBuildMapsThatMatchTheSimulatedWorld) {
     }
   }
   const v1::OccupancyBatchResponse answers = batchQuery(http, "shared", points);
-  size_t occupied = 0, occupied_right = 0, free = 0, free_right = 0;
+  // A ray ends on a voxel face, so range noise puts about half the endpoints
+  // in the free cell in front of the surface: an occupied cell counts as
+  // right when the surface is within one cell of it.
+  const auto surface_within_one_cell = [&](const Eigen::Vector3d& p) {
+    if (sim::trueOccupied(scene.world, p)) return true;
+    for (int axis = 0; axis < 3; ++axis) {
+      for (const double step : {-res, res}) {
+        if (sim::trueOccupied(scene.world, p + step * Eigen::Vector3d::Unit(axis))) return true;
+      }
+    }
+    return false;
+  };
+  size_t occupied = 0, occupied_right = 0, occupied_exact = 0, free = 0, free_right = 0;
   for (size_t i = 0; i < points.size(); ++i) {
-    const bool truth = sim::trueOccupied(scene.world, points[i]);
     if (answers.states(static_cast<int>(i)) == v1::OCCUPIED) {
       ++occupied;
-      occupied_right += truth;
+      occupied_exact += sim::trueOccupied(scene.world, points[i]);
+      occupied_right += surface_within_one_cell(points[i]);
     } else if (answers.states(static_cast<int>(i)) == v1::FREE) {
       ++free;
-      free_right += !truth;
+      free_right += !sim::trueOccupied(scene.world, points[i]);
     }
   }
   std::cout << "known " << occupied + free << " of " << points.size() << " sampled cells; occupied precision "
-            << double(occupied_right) / occupied << ", free precision " << double(free_right) / free << "\n";
+            << double(occupied_right) / occupied << " (same cell " << double(occupied_exact) / occupied
+            << "), free precision " << double(free_right) / free << "\n";
   ASSERT_GT(occupied, 200u);
   ASSERT_GT(free, 5000u);
   // Surfaces seen at grazing angles and sensor noise leave some cells wrong;
   // the bulk must match the world.
-  EXPECT_GT(double(occupied_right) / occupied, 0.8);
+  EXPECT_GT(double(occupied_right) / occupied, 0.97);
   EXPECT_GT(double(free_right) / free, 0.97);
 
   // The single-point endpoint gives the batch's answers.
