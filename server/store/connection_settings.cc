@@ -44,8 +44,8 @@ void applyWriterSettings(Connection& writer, const StoreOptions& options) {
                        " (the file system must support shared memory, e.g. not a network share)");
   }
   writer.exec("PRAGMA synchronous = FULL", "set synchronous=FULL");
-  writer.exec("PRAGMA wal_autocheckpoint = " + std::to_string(options.wal_autocheckpoint_pages),
-              "set WAL checkpoint threshold");
+  // Checkpoints run on the store's Checkpointer, never inside a commit.
+  writer.exec("PRAGMA wal_autocheckpoint = 0", "disable checkpoints in commits");
   writer.exec("PRAGMA journal_size_limit = " + std::to_string(kWalSizeLimitBytes), "set WAL size limit");
   if (options.max_database_bytes > 0) {
     const int64_t page_bytes = queryInt64(writer, "PRAGMA page_size");

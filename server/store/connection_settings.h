@@ -15,7 +15,7 @@ void applyCommonSettings(Connection& connection, int64_t cache_bytes);
 
 /// Everything of applyCommonSettings plus, for the one writing connection:
 /// page size (new databases only), WAL journal, synchronous=FULL (a commit
-/// survives power loss), the checkpoint threshold and the size limit.
+/// survives power loss), no automatic checkpoints and the size limit.
 /// @throws StoreError e.g. when the file system cannot hold a WAL database
 void applyWriterSettings(Connection& writer, const StoreOptions& options);
 

@@ -5,12 +5,16 @@
 
 #include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <cerrno>
 #include <cstring>
 #include <limits>
 #include <mutex>
+#include <optional>
+#include <stdexcept>
 #include <system_error>
 
+#include "store/checkpointer.h"
 #include "store/connection_settings.h"
 #include "store/reader_pool.h"
 #include "store/schema.h"
@@ -120,11 +124,16 @@ class SqliteStore final : public Store {
  public:
   SqliteStore(const fs::path& database, const StoreOptions& options)
       : writer_(database, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE), readers_(database, options.cache_bytes) {
+    if (options.wal_checkpoint_period_ms < 1 || options.wal_restart_pages < 1) {
+      throw std::invalid_argument("store: wal_checkpoint_period_ms and wal_restart_pages must be >= 1");
+    }
     applyWriterSettings(writer_, options);
     prepareSchema(writer_);
     Statement count(writer_, kMessageCount, "count messages");
     count.step();
     message_count_ = static_cast<uint64_t>(count.int64At(0));
+    checkpointer_.emplace(database, options.cache_bytes, options.wal_restart_pages,
+                          std::chrono::milliseconds(options.wal_checkpoint_period_ms), write_mutex_);
   }
 
   /// Reads every page: after a crash, proof that WAL recovery left a sound database.
@@ -340,6 +349,8 @@ class SqliteStore final : public Store {
   std::mutex write_mutex_;
   Connection writer_;
   ReaderPool readers_;
+  /// Declared last: its thread stops before the connections close.
+  std::optional<Checkpointer> checkpointer_;
   /// Rows of the messages table, kept here because count(*) scans the table.
   std::atomic<uint64_t> message_count_ = 0;
 };

@@ -30,8 +30,11 @@ class StoreError : public std::runtime_error {
 struct StoreOptions {
   /// Bytes of page cache per connection.
   int64_t cache_bytes = 64ll << 20;
-  /// Automatic WAL checkpoint threshold in pages (SQLite's default is 1000).
-  int wal_autocheckpoint_pages = 4000;
+  /// WAL checkpoints run in the background every this many ms (passive: they
+  /// never hold up a commit) ...
+  int wal_checkpoint_period_ms = 100;
+  /// ... and restart the WAL once it is this many pages long (16 KiB pages).
+  int wal_restart_pages = 4000;
   /// Largest size of the database file in bytes, 0 for no limit. A write that
   /// would grow the file beyond fails with StoreError ("database or disk is
   /// full") and changes nothing, as when the disk itself fills up.

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <exception>
 #include <condition_variable>
 #include <mutex>
 #include <random>
@@ -106,8 +107,31 @@ struct Totals {
   }
 };
 
+/// What one robot drives and, in benchmark mode, the clouds it cycles over.
+struct RobotPlan {
+  std::vector<Eigen::Isometry3d> poses;
+  std::mt19937_64 rng;
+  std::vector<rmap::v1::RobotMessage> cache;
+};
+
+/// Plans the trajectory and simulates the cached clouds up front, so the
+/// timed part of a benchmark feed measures the server, not the simulator.
+RobotPlan planRobot(const SimScene& scene, const SimFeedOptions& o, int index) {
+  std::seed_seq seeds{o.seed, static_cast<uint64_t>(index)};
+  RobotPlan plan{sim::planTrajectory(scene.world, trajectoryOptions(o), o.seed + static_cast<uint64_t>(index)),
+                 std::mt19937_64(seeds), {}};
+  const size_t cached = o.max_clouds == 0 ? o.precompute_clouds
+                                          : std::min<size_t>(o.precompute_clouds, static_cast<size_t>(o.max_clouds));
+  const sim::LidarModel model = lidarModel(o);
+  for (size_t k = 0; k < cached; ++k) {
+    plan.cache.push_back(makeCloud(scene.world, plan.poses[k % plan.poses.size()], model, plan.rng));
+  }
+  return plan;
+}
+
 /// One robot from Hello to its last ack; never throws (failures go to totals.errors).
-void runRobot(const SimScene& scene, const SimFeedOptions& o, int index, Clock::time_point end, Totals& totals) {
+void runRobot(const SimScene& scene, const SimFeedOptions& o, int index, RobotPlan& plan, Clock::time_point end,
+              Totals& totals) {
   RobotClientOptions client_options;
   client_options.server_url = o.server_url;
   client_options.token = o.token;
@@ -144,12 +168,7 @@ void runRobot(const SimScene& scene, const SimFeedOptions& o, int index, Clock::
                       error.message() + (error.fatal() ? " (fatal)" : ""));
     });
 
-    const std::vector<Eigen::Isometry3d> poses =
-        sim::planTrajectory(scene.world, trajectoryOptions(o), o.seed + static_cast<uint64_t>(index));
     const sim::LidarModel model = lidarModel(o);
-    std::seed_seq seeds{o.seed, static_cast<uint64_t>(index)};
-    std::mt19937_64 rng(seeds);
-    std::vector<rmap::v1::RobotMessage> cache;
 
     // A single sender: sequence numbers follow Welcome::last_durable_seq one by one,
     // so each cloud's point count is filed before its ack can arrive.
@@ -157,17 +176,14 @@ void runRobot(const SimScene& scene, const SimFeedOptions& o, int index, Clock::
     const auto period = o.rate_hz > 0 ? std::chrono::duration_cast<Clock::duration>(
                                             std::chrono::duration<double>(1.0 / o.rate_hz))
                                       : Clock::duration::zero();
-    Clock::time_point due = Clock::now();
+    // Robots are not synchronised: each starts at its own offset into the period.
+    Clock::time_point due = Clock::now() + period * index / o.robots;
     for (uint64_t k = 0; o.max_clouds == 0 || k < o.max_clouds; ++k) {
       if (due >= end || Clock::now() >= end) break;
       std::this_thread::sleep_until(due);
-      rmap::v1::RobotMessage message;
-      if (o.precompute_clouds == 0) {
-        message = makeCloud(scene.world, poses[k % poses.size()], model, rng);
-      } else {
-        if (k < o.precompute_clouds) cache.push_back(makeCloud(scene.world, poses[k % poses.size()], model, rng));
-        message = cache[k % o.precompute_clouds];
-      }
+      rmap::v1::RobotMessage message = plan.cache.empty()
+                                           ? makeCloud(scene.world, plan.poses[k % plan.poses.size()], model, plan.rng)
+                                           : plan.cache[k % plan.cache.size()];
       message.mutable_cloud()->set_stamp_ns(wallClockNs());
       const uint64_t points = static_cast<uint64_t>(message.cloud().xyz_m_size() / 3);
       {
@@ -220,6 +236,25 @@ SimFeedResult runSimFeed(const SimScene& scene, const SimFeedOptions& options) {
   lidarModel(options).validate();
   trajectoryOptions(options).validate();
 
+  std::vector<RobotPlan> plans(static_cast<size_t>(options.robots));
+  {
+    std::vector<std::exception_ptr> failures(plans.size());
+    std::vector<std::thread> planners;
+    for (size_t i = 0; i < plans.size(); ++i) {
+      planners.emplace_back([&, i] {
+        try {
+          plans[i] = planRobot(scene, options, static_cast<int>(i));
+        } catch (...) {
+          failures[i] = std::current_exception();
+        }
+      });
+    }
+    for (std::thread& planner : planners) planner.join();
+    for (const std::exception_ptr& failure : failures) {
+      if (failure) std::rethrow_exception(failure);
+    }
+  }
+
   Totals totals;
   const Clock::time_point start = Clock::now();
   const Clock::time_point end = start + options.duration;
@@ -230,7 +265,7 @@ SimFeedResult runSimFeed(const SimScene& scene, const SimFeedOptions& options) {
   threads.reserve(static_cast<size_t>(options.robots));
   for (int i = 0; i < options.robots; ++i) {
     threads.emplace_back([&, i] {
-      runRobot(scene, options, i, end, totals);
+      runRobot(scene, options, i, plans[static_cast<size_t>(i)], end, totals);
       std::lock_guard lock(mutex);
       --running;
       cv.notify_all();

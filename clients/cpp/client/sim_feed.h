@@ -48,10 +48,10 @@ struct SimFeedOptions {
   /// Lidar: beams per ring and rings.
   int lidar_columns = 360;
   int lidar_rings = 16;
-  /// Benchmark mode: when > 0 each robot simulates at most this many distinct
-  /// clouds (lazily, the first time it needs each) and then cycles over them
-  /// with fresh stamps, so a fast feed (rate_hz 0) measures the server rather
-  /// than the lidar simulator. 0 = every cloud is simulated at its own pose.
+  /// Benchmark mode: when > 0 each robot simulates this many distinct clouds
+  /// before the clock starts and then cycles over them with fresh stamps, so
+  /// a fast feed (rate_hz 0) measures the server rather than the lidar
+  /// simulator. 0 = every cloud is simulated at its own pose when sent.
   size_t precompute_clouds = 0;
   /// Per robot: connect, each flow-controlled send, and the final wait for acks.
   std::chrono::milliseconds timeout{10000};
