@@ -1,8 +1,11 @@
 #include "app/auth.h"
 
+#include <boost/beast/core/string.hpp>
 #include <boost/beast/http/field.hpp>
 
 #include <algorithm>
+
+#include "net/ws_handshake.h"
 
 namespace rmap::app {
 
@@ -26,14 +29,10 @@ bool sameToken(std::string_view a, std::string_view b) {
 
 }  // namespace
 
-std::optional<std::string> tokenFromSubprotocols(std::string_view header) {
+std::optional<std::string> tokenFromSubprotocols(const net::Request& request) {
   constexpr std::string_view kPrefix = "bearer.";
-  while (!header.empty()) {
-    const size_t comma = header.find(',');
-    const std::string_view item = trim(header.substr(0, comma));
-    if (item.substr(0, kPrefix.size()) == kPrefix) return std::string(item.substr(kPrefix.size()));
-    if (comma == std::string_view::npos) break;
-    header.remove_prefix(comma + 1);
+  for (const std::string_view item : net::offeredSubprotocols(request)) {
+    if (item.starts_with(kPrefix)) return std::string(item.substr(kPrefix.size()));
   }
   return std::nullopt;
 }
@@ -63,18 +62,19 @@ AuthResult Authenticator::authenticate(const net::Request& request, const net::P
   const auto authorization = request.find(http::field::authorization);
   if (authorization != request.end()) {
     const std::string_view value = trim(std::string_view(authorization->value().data(), authorization->value().size()));
-    constexpr std::string_view kBearer = "Bearer ";
-    if (value.size() <= kBearer.size() || !std::equal(kBearer.begin(), kBearer.end(), value.begin())) {
+    // Auth schemes are case-insensitive (RFC 7235 §2.1): "bearer" and "BEARER" are "Bearer".
+    constexpr std::string_view kBearer = "bearer ";
+    const bool bearer = value.size() > kBearer.size() &&
+                        boost::beast::iequals(boost::beast::string_view(value.data(), kBearer.size()),
+                                              boost::beast::string_view(kBearer.data(), kBearer.size()));
+    if (!bearer) {
       result.code = "unauthenticated";
       result.message = "Authorization must be 'Bearer <token>'";
       return result;
     }
     token = std::string(trim(value.substr(kBearer.size())));
   } else {
-    const auto protocols = request.find(http::field::sec_websocket_protocol);
-    if (protocols != request.end()) {
-      token = tokenFromSubprotocols(std::string_view(protocols->value().data(), protocols->value().size()));
-    }
+    token = tokenFromSubprotocols(request);
   }
   if (!token) {
     result.code = "unauthenticated";

@@ -47,7 +47,8 @@ class Authenticator {
   AuthConfig config_;
 };
 
-/// The token offered in Sec-WebSocket-Protocol as "bearer.<token>", if any.
-std::optional<std::string> tokenFromSubprotocols(std::string_view header);
+/// The token offered as a Sec-WebSocket-Protocol item "bearer.<token>" (the
+/// first such item of every field), if any.
+std::optional<std::string> tokenFromSubprotocols(const net::Request& request);
 
 }  // namespace rmap::app

@@ -72,6 +72,13 @@ void readMaps(const YAML::Node& node, MapDefaults& maps) {
 
 }  // namespace
 
+size_t batchRequestBytes(size_t points) {
+  const size_t payload = points * kBatchBytesPerPoint;
+  size_t length_bytes = 1;  // varint: 7 bits per byte
+  for (size_t rest = payload >> 7; rest != 0; rest >>= 7) ++length_bytes;
+  return payload == 0 ? 0 : 1 + length_bytes + payload;  // field tag, length, packed doubles
+}
+
 void loadConfigFile(const std::filesystem::path& file, Config& config) {
   try {
     const YAML::Node root = YAML::LoadFile(file.string());
@@ -95,7 +102,17 @@ void setListenAddress(const std::string& host_port, Config& config) {
     throw std::invalid_argument("listen address must be HOST:PORT, not '" + host_port + "'");
   }
   std::string host = host_port.substr(0, colon);
-  if (host.front() == '[' && host.back() == ']') host = host.substr(1, host.size() - 2);
+  const bool bracketed = host.front() == '[';
+  if (bracketed) {
+    if (host.size() < 3 || host.back() != ']') {
+      throw std::invalid_argument("listen address '" + host_port + "' needs a non-empty [IPv6 address] before ':PORT'");
+    }
+    host = host.substr(1, host.size() - 2);
+  }
+  // Unbracketed, "::1:80" could also mean host "::1:80" with the port forgotten.
+  if (host.find_first_of("[]") != std::string::npos || (!bracketed && host.find(':') != std::string::npos)) {
+    throw std::invalid_argument("listen address '" + host_port + "' is malformed; write IPv6 as [ADDRESS]:PORT");
+  }
   const std::string port_text = host_port.substr(colon + 1);
   size_t used = 0;
   int port = -1;
@@ -123,8 +140,29 @@ void validate(const Config& config) {
   if (config.maps.insert_threads < 1) throw std::invalid_argument("maps.insert_threads must be >= 1");
   if (!(config.snapshot_interval_s > 0.0)) throw std::invalid_argument("snapshot_interval_s must be > 0");
   if (config.viewer_tick_ms < 10) throw std::invalid_argument("viewer_tick_ms must be >= 10");
+  // Zero would not mean "nothing allowed" everywhere: Beast reads a frame limit of 0 as no limit.
+  const LimitsConfig& l = config.limits;
+  for (const auto& [name, value] : {std::pair{"max_frame_bytes", l.max_frame_bytes},
+                                    {"max_body_bytes", l.max_body_bytes},
+                                    {"max_points_per_cloud", l.max_points_per_cloud},
+                                    {"max_batch_points", l.max_batch_points},
+                                    {"max_in_flight_per_robot", l.max_in_flight_per_robot},
+                                    {"viewer_send_queue_bytes", l.viewer_send_queue_bytes},
+                                    {"max_box_cuboids", l.max_box_cuboids}}) {
+    if (value < 1) throw std::invalid_argument(std::string("limits.") + name + " must be >= 1");
+  }
   if (!(config.limits.max_messages_per_s_per_robot > 0.0)) {
     throw std::invalid_argument("limits.max_messages_per_s_per_robot must be > 0");
+  }
+  // A batch of max_batch_points must be sendable: its compact (protobuf) body has to fit in
+  // max_body_bytes, or the advertised point limit is a lie answered with 413 payload_too_large.
+  // Refused rather than derived, so neither limit silently differs from what the file says.
+  if (config.limits.max_batch_points > SIZE_MAX / kBatchBytesPerPoint ||
+      batchRequestBytes(config.limits.max_batch_points) > config.limits.max_body_bytes) {
+    throw std::invalid_argument("limits.max_batch_points (" + std::to_string(config.limits.max_batch_points) +
+                                ") does not fit in limits.max_body_bytes (" +
+                                std::to_string(config.limits.max_body_bytes) + "): a protobuf batch takes " +
+                                std::to_string(kBatchBytesPerPoint) + " bytes per point");
   }
   for (const TokenConfig& t : config.auth.tokens) {
     if (t.token.size() < 8) throw std::invalid_argument("auth tokens must have at least 8 characters");

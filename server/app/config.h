@@ -32,7 +32,8 @@ struct LimitsConfig {
   size_t max_frame_bytes = 32u << 20;        ///< robot/viewer WebSocket frames
   size_t max_body_bytes = 64u << 20;         ///< HTTP request bodies
   size_t max_points_per_cloud = 2'000'000;
-  size_t max_batch_points = 10'000'000;      ///< occupancy:batch
+  /// occupancy:batch; a protobuf request of this many points must fit in max_body_bytes
+  size_t max_batch_points = 2'000'000;
   size_t max_in_flight_per_robot = 256;      ///< unacknowledged messages before reading pauses
   double max_messages_per_s_per_robot = 2000;  ///< beyond: Error "rate_limited", message refused
   size_t viewer_send_queue_bytes = 4u << 20; ///< a viewer further behind is skipped
@@ -68,6 +69,14 @@ void loadConfigFile(const std::filesystem::path& file, Config& config);
 /// Parses "HOST:PORT" (IPv6 in brackets) into the config.
 /// @throws std::invalid_argument for a malformed address
 void setListenAddress(const std::string& host_port, Config& config);
+
+/// Bytes of one point in an rmap.v1.OccupancyBatchRequest: three packed doubles.
+inline constexpr size_t kBatchBytesPerPoint = 3 * sizeof(double);
+
+/// Bytes of an rmap.v1.OccupancyBatchRequest holding `points` points (the
+/// smallest body a batch of that many points can have);
+/// `points` <= SIZE_MAX / kBatchBytesPerPoint.
+size_t batchRequestBytes(size_t points);
 
 /// @throws std::invalid_argument naming the first bad value
 void validate(const Config& config);

@@ -14,9 +14,8 @@ namespace {
 
 void requireMethod(const net::Request& request, http::verb verb) {
   if (request.method() != verb) {
-    throw ApiError(405, "method_not_allowed",
-                   std::string(http::to_string(request.method())) + " is not allowed here; use " +
-                       std::string(http::to_string(verb)));
+    const std::string_view method(request.method_string().data(), request.method_string().size());
+    throw ApiError::methodNotAllowed(method, std::string(http::to_string(verb)));
   }
 }
 
@@ -58,14 +57,13 @@ net::Response HttpApi::handle(net::Request& request, const net::Peer& peer) {
   } catch (const ApiError& e) {
     response = net::jsonError(static_cast<http::status>(e.status()), e.code(), e.what(), request.version(),
                               request.keep_alive());
-    if (e.status() == 405) response.set(http::field::allow, "GET, POST");
+    if (!e.allow().empty()) response.set(http::field::allow, e.allow());
   } catch (const std::invalid_argument& e) {
     response = net::jsonError(http::status::bad_request, "invalid_argument", e.what(), request.version(),
                               request.keep_alive());
   } catch (const std::exception& e) {
     spdlog::error("{} {}: {}", std::string(request.method_string()), std::string(request.target()), e.what());
-    response = net::jsonError(http::status::internal_server_error, "internal", e.what(), request.version(),
-                              request.keep_alive());
+    response = net::internalError(request.version(), request.keep_alive());
   }
   metrics.http_requests.fetch_add(1, std::memory_order_relaxed);
   if (response.result_int() >= 400) metrics.http_errors.fetch_add(1, std::memory_order_relaxed);
@@ -207,13 +205,21 @@ net::Response HttpApi::loopClosures(const net::Request& request, const Target& t
   const int64_t since = target.integer("since", 0, 0, INT64_MAX);
   const int64_t limit = target.integer("limit", 1000, 1, 100'000);
   nlohmann::json events = nlohmann::json::array();
-  for (const store::EventRecord& e : service_.store().events(map, since, static_cast<size_t>(limit))) {
-    if (e.kind != "loop_closure") continue;
-    nlohmann::json event = nlohmann::json::parse(e.json);
-    event["id"] = e.id;
-    event["map"] = e.map;
-    event["stamp_ns"] = e.stamp_ns;
-    events.push_back(std::move(event));
+  // The store cannot filter by kind: read on past other events until the page is full or the events end.
+  const size_t page = static_cast<size_t>(limit);
+  for (int64_t cursor = since; events.size() < page;) {
+    const std::vector<store::EventRecord> read = service_.store().events(map, cursor, page);
+    for (const store::EventRecord& e : read) {
+      cursor = e.id;
+      if (e.kind != "loop_closure") continue;
+      nlohmann::json event = nlohmann::json::parse(e.json);
+      event["id"] = e.id;
+      event["map"] = e.map;
+      event["stamp_ns"] = e.stamp_ns;
+      events.push_back(std::move(event));
+      if (events.size() == page) break;
+    }
+    if (read.size() < page) break;
   }
   return jsonResponse(request, {{"loop_closures", std::move(events)}});
 }

@@ -20,12 +20,21 @@ class ApiError : public std::runtime_error {
  public:
   ApiError(int status, std::string code, const std::string& message)
       : std::runtime_error(message), status_(status), code_(std::move(code)) {}
+  /// 405 for `method` on a route that serves only `allowed` (e.g. "GET").
+  static ApiError methodNotAllowed(std::string_view method, std::string allowed) {
+    ApiError e(405, "method_not_allowed", std::string(method) + " is not allowed here; use " + allowed);
+    e.allow_ = std::move(allowed);
+    return e;
+  }
   int status() const { return status_; }
   const std::string& code() const { return code_; }
+  /// Value of the Allow header (405 only), else empty.
+  const std::string& allow() const { return allow_; }
 
  private:
   int status_;
   std::string code_;
+  std::string allow_;
 };
 
 /// Path segments (percent-decoded) and query parameters of a request target.

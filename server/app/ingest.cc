@@ -1,7 +1,9 @@
 #include "app/ingest.h"
 
 #include <cmath>
+#include <cstdint>
 #include <cstring>
+#include <sstream>
 
 namespace rmap::app {
 
@@ -28,7 +30,7 @@ bool allFinite(const Floats& values) {
   return true;
 }
 
-std::string checkCloud(const v1::PointCloud& cloud, const LimitsConfig& limits) {
+std::string checkCloud(const v1::PointCloud& cloud, const LimitsConfig& limits, const map3d::Grid& grid) {
   const int n = cloud.xyz_m_size();
   if (n == 0) return "cloud has no points";
   if (n % 3 != 0) return "cloud xyz_m holds " + std::to_string(n) + " values, not a multiple of 3";
@@ -44,7 +46,16 @@ std::string checkCloud(const v1::PointCloud& cloud, const LimitsConfig& limits) 
     if (!std::isfinite(cloud.xyz_m(i))) return "cloud point " + std::to_string(i / 3) + " is not finite";
   }
   if (!allFinite(cloud.intensities())) return "cloud intensities are not all finite";
-  return checkPose(cloud.sensor_pose(), "cloud sensor_pose");
+  if (std::string e = checkPose(cloud.sensor_pose(), "cloud sensor_pose"); !e.empty()) return e;
+  // The map cannot take rays from outside its cells: refused here, before the message is made durable.
+  map3d::CellKey origin_cell;
+  if (!grid.cellChecked(sensorOrigin(cloud), origin_cell)) {
+    std::ostringstream text;
+    text << "cloud sensor_pose position is outside the map's addressable range (±"
+         << map3d::kCellLimit * grid.resolution() << " m per axis)";
+    return text.str();
+  }
+  return {};
 }
 
 std::string checkScan(const v1::LaserScan2D& scan) {
@@ -89,8 +100,16 @@ std::string checkImage(const v1::CameraImage& image) {
     case v1::CameraImage::MONO8:
     case v1::CameraImage::RGB8: {
       const uint64_t channels = image.encoding() == v1::CameraImage::RGB8 ? 3 : 1;
-      const uint64_t expected = uint64_t{image.width()} * image.height() * channels;
-      if (image.width() == 0 || image.height() == 0 || data.size() != expected) {
+      if (image.width() == 0 || image.height() == 0) return "raw image needs width > 0 and height > 0";
+      // width·height fits in 64 bits (both are 32-bit), times channels may not: a wrapped
+      // product could equal the size of a small payload.
+      const uint64_t pixels = uint64_t{image.width()} * image.height();
+      if (pixels > UINT64_MAX / channels) {
+        return "raw image of " + std::to_string(image.width()) + "x" + std::to_string(image.height()) +
+               " pixels is too large";
+      }
+      const uint64_t expected = pixels * channels;
+      if (data.size() != expected) {
         return "raw image needs width*height*channels = " + std::to_string(expected) + " bytes, got " +
                std::to_string(data.size());
       }
@@ -128,10 +147,12 @@ std::string checkHello(const v1::Hello& hello) {
   return {};
 }
 
-std::string checkDataMessage(const v1::RobotMessage& message, const LimitsConfig& limits) {
+std::string checkDataMessage(const v1::RobotMessage& message, const LimitsConfig& limits, const map3d::Grid& grid) {
   if (message.seq() == 0) return "seq must be >= 1";
+  // The log keeps seq in a signed 64-bit column; a larger one would fail its whole commit batch.
+  if (message.seq() > static_cast<uint64_t>(INT64_MAX)) return "seq must be below 2^63";
   switch (message.body_case()) {
-    case v1::RobotMessage::kCloud: return checkCloud(message.cloud(), limits);
+    case v1::RobotMessage::kCloud: return checkCloud(message.cloud(), limits, grid);
     case v1::RobotMessage::kScan: return checkScan(message.scan());
     case v1::RobotMessage::kImage: return checkImage(message.image());
     case v1::RobotMessage::kOdometry: return checkPose(message.odometry().pose(), "odometry pose");
@@ -149,6 +170,11 @@ Eigen::Isometry3d toIsometry(const v1::Pose3& pose) {
   }
   t.translation() = Eigen::Vector3d(pose.position_m().x(), pose.position_m().y(), pose.position_m().z());
   return t;
+}
+
+Eigen::Vector3f sensorOrigin(const v1::PointCloud& cloud) {
+  const v1::Vector3& p = cloud.sensor_pose().position_m();
+  return Eigen::Vector3d(p.x(), p.y(), p.z()).cast<float>();
 }
 
 CloudInMap cloudInMap(const v1::PointCloud& cloud) {

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "app/config.h"
+#include "map3d/cell_key.h"
 #include "rmap/v1/robot_stream.pb.h"
 
 namespace rmap::app {
@@ -19,10 +20,11 @@ bool validName(const std::string& name);
 /// Checks a Hello; returns what is wrong, empty when valid.
 std::string checkHello(const v1::Hello& hello);
 
-/// Checks a data message (everything but Hello) against the protocol and the
-/// limits: seq >= 1, a body, finite values, consistent sizes, known encodings.
+/// Checks a data message (everything but Hello) against the protocol, the
+/// limits and the map it goes to: 1 <= seq < 2^63, a body, finite values,
+/// consistent sizes, known encodings, a cloud origin inside `grid`'s cells.
 /// @return what is wrong, empty when the message is valid
-std::string checkDataMessage(const v1::RobotMessage& message, const LimitsConfig& limits);
+std::string checkDataMessage(const v1::RobotMessage& message, const LimitsConfig& limits, const map3d::Grid& grid);
 
 /// A pose message as a rigid transform; an all-zero quaternion is identity.
 Eigen::Isometry3d toIsometry(const v1::Pose3& pose);
@@ -32,6 +34,9 @@ struct CloudInMap {
   Eigen::Isometry3d sensor_pose = Eigen::Isometry3d::Identity();  ///< map frame
   std::vector<Eigen::Vector3f> points_m;                           ///< map frame
 };
+
+/// The rays' origin as the map takes it (m, map frame): the sensor position in float.
+Eigen::Vector3f sensorOrigin(const v1::PointCloud& cloud);
 
 /// Puts the cloud's points in the map frame (a checked message is assumed).
 CloudInMap cloudInMap(const v1::PointCloud& cloud);

@@ -132,12 +132,8 @@ net::Response HttpApi::occupancyBox(const net::Request& request, const Target& t
   map3d::CellKey min, max;
   for (int a = 0; a < 3; ++a) {
     if (!(lo[a] <= hi[a])) throw ApiError(400, "invalid_argument", "min must not exceed max on any axis");
-    const auto clampCell = [](double cell) {
-      return static_cast<int32_t>(
-          std::clamp(std::floor(cell), -double(map3d::kCellLimit), double(map3d::kCellLimit - 1)));
-    };
-    min[a] = clampCell(lo[a] / map.resolution());
-    max[a] = clampCell(hi[a] / map.resolution());
+    min[a] = map.grid().index(lo[a]);
+    max[a] = map.grid().index(hi[a]);
   }
   const size_t limit = static_cast<size_t>(
       target.integer("limit", 1000, 1, static_cast<int64_t>(service_.config().limits.max_box_cuboids)));
@@ -184,6 +180,7 @@ net::Response HttpApi::tileset(const net::Request& request, MapWorker& worker) {
   return jsonResponse(request, {{"map", worker.name()},
                                 {"resolution_m", map.resolution()},
                                 {"tile_edge_cells", kTileEdgeCells},
+                                {"epoch", service_.epoch()},
                                 {"map_version", worker.tiles().mapVersion()},
                                 {"levels", std::move(levels)}});
 }
@@ -204,7 +201,9 @@ net::Response HttpApi::tile(const net::Request& request, const Target& target, M
   }
   const uint64_t version = worker.tiles().version(key).value_or(0);
   const bool json = acceptsJson(request);
-  const std::string etag = "\"" + std::to_string(version) + (json ? "j" : "p") + "\"";
+  // Versions restart with every start of the server; the epoch keeps ETags of different starts apart.
+  const std::string etag =
+      "\"" + std::to_string(service_.epoch()) + "-" + std::to_string(version) + (json ? "j" : "p") + "\"";
   const auto if_none_match = request.find(http::field::if_none_match);
   if (if_none_match != request.end() && std::string_view(if_none_match->value().data(), if_none_match->value().size()) == etag) {
     net::Response response{http::status::not_modified, request.version()};
@@ -224,14 +223,15 @@ net::Response HttpApi::tile(const net::Request& request, const Target& target, M
                       {"probability", map3d::probability(c.log_odds)}});
     }
     response = jsonResponse(request, {{"level", key.level}, {"x", key.x}, {"y", key.y}, {"z", key.z},
-                                      {"version", version}, {"resolution_m", map.resolution()},
-                                      {"cuboids", std::move(list)}});
+                                      {"epoch", service_.epoch()}, {"version", version},
+                                      {"resolution_m", map.resolution()}, {"cuboids", std::move(list)}});
   } else {
     v1::Tile out;
     out.set_level(static_cast<uint32_t>(key.level));
     out.set_x(key.x);
     out.set_y(key.y);
     out.set_z(key.z);
+    out.set_epoch(static_cast<uint64_t>(service_.epoch()));
     out.set_version(version);
     out.set_resolution_m(map.resolution());
     for (const map3d::CuboidBox& c : cuboids) {

@@ -44,9 +44,12 @@ MapWorker::MapWorker(std::string name, std::unique_ptr<map3d::CuboidMap> map, in
       last_snapshot_(Clock::now()),
       last_pose_flush_(Clock::now()) {}
 
-MapWorker::~MapWorker() {
+MapWorker::~MapWorker() { stop(); }
+
+void MapWorker::stop() {
   {
     std::lock_guard lock(mutex_);
+    if (stopping_) return;
     stopping_ = true;
   }
   wake_.notify_all();
@@ -128,8 +131,7 @@ void MapWorker::apply(int64_t log_id, const v1::RobotMessage& message, const std
     options.threads = config_.maps.insert_threads;
     // Points outside the addressable range are dropped rather than refusing a whole durable message.
     options.invalid_points = map3d::InvalidPoints::kSkip;
-    const map3d::ScanStats stats =
-        map_->insertScan(in_map.sensor_pose.translation().cast<float>(), in_map.points_m, options);
+    const map3d::ScanStats stats = map_->insertScan(sensorOrigin(cloud), in_map.points_m, options);
     metrics_.points_integrated.fetch_add(stats.points - stats.rejected_points, std::memory_order_relaxed);
     const RobotPose pose{robot_id, name_, message.seq(), cloud.stamp_ns(), in_map.sensor_pose};
     pending_poses_.emplace_back(robot_id, toTrajectoryPose(pose));

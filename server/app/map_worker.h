@@ -41,7 +41,7 @@ class MapWorker {
   /// @param applied_id     log id already in `map` (the snapshot's), 0 for a new map
   MapWorker(std::string name, std::unique_ptr<map3d::CuboidMap> map, int64_t applied_id, const Config& config,
             store::Store& store, Metrics& metrics, PoseSink pose_sink);
-  /// Applies what is queued, writes a final snapshot, joins.
+  /// stop().
   ~MapWorker();
   MapWorker(const MapWorker&) = delete;
   MapWorker& operator=(const MapWorker&) = delete;
@@ -50,6 +50,11 @@ class MapWorker {
   void applyNow(int64_t log_id, const v1::RobotMessage& message, const std::string& robot_id);
   /// Starts the apply thread.
   void start();
+  /// Applies what is queued, joins the thread and writes a final snapshot; later
+  /// calls do nothing. The owner calls it while the store and metrics live: a
+  /// session may hold the worker longer, and its last reference may even be
+  /// dropped on the worker thread.
+  void stop();
   /// Queues a durable message; `applied` runs on the worker thread afterwards.
   void post(int64_t log_id, std::shared_ptr<const v1::RobotMessage> message, std::string robot_id,
             std::function<void()> applied);

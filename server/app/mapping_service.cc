@@ -11,13 +11,68 @@
 #define RMAP_VERSION "dev"
 #endif
 
+namespace rmap::map3d {
+
+NLOHMANN_JSON_SERIALIZE_ENUM(SensorModel, {{SensorModel::kBeam, "beam"}, {SensorModel::kEndpoint, "endpoint"}})
+NLOHMANN_JSON_SERIALIZE_ENUM(FreeSpaceTracing, {{FreeSpaceTracing::kOctomapExact, "octomap_exact"},
+                                                {FreeSpaceTracing::kStopAtFreed, "stop_at_freed"}})
+
+}  // namespace rmap::map3d
+
 namespace rmap::app {
 
 namespace {
 
+/// How often the tick thread writes robots' latest message times to the store.
+constexpr auto kLastSeenPersistPeriod = std::chrono::seconds(1);
+
 int64_t nowNs() {
   return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::system_clock::now().time_since_epoch())
       .count();
+}
+
+/// Calls fn(key, field) for every parameter that shapes a map's content, under its key in the
+/// map's stored params_json: one list for writing and reading them.
+template <typename Occupancy, typename Fusion, typename Fn>
+void forEachMapParam(Occupancy& o, Fusion& f, Fn&& fn) {
+  fn("hit_log_odds", o.hit_log_odds);
+  fn("miss_log_odds", o.miss_log_odds);
+  fn("clamp_min_log_odds", o.clamp_min_log_odds);
+  fn("clamp_max_log_odds", o.clamp_max_log_odds);
+  fn("occupied_threshold_log_odds", o.occupied_threshold_log_odds);
+  fn("max_range_m", o.max_range_m);
+  fn("sensor_model", o.sensor_model);
+  fn("free_space_tracing", o.free_space_tracing);
+  fn("stop_after_freed_cells", o.stop_after_freed_cells);
+  fn("fusion_tolerance_log_odds", f.tolerance_log_odds);
+  fn("fuse_after_scans", f.fuse_after_scans);
+}
+
+nlohmann::json mapParamsJson(const map3d::OccupancyParams& occupancy, const map3d::FusionParams& fusion) {
+  nlohmann::json out = nlohmann::json::object();
+  forEachMapParam(occupancy, fusion, [&](const char* key, const auto& value) { out[key] = value; });
+  return out;
+}
+
+/// Reads a map's stored parameters over `occupancy` and `fusion`.
+/// @return the keys absent from `params_json` (maps stored by older versions), which keep their value
+/// @throws std::runtime_error naming the map when the stored parameters do not parse
+std::vector<std::string> readMapParams(const store::MapRecord& record, map3d::OccupancyParams& occupancy,
+                                       map3d::FusionParams& fusion) {
+  std::vector<std::string> missing;
+  try {
+    const nlohmann::json stored = nlohmann::json::parse(record.params_json);
+    forEachMapParam(occupancy, fusion, [&](const char* key, auto& value) {
+      if (stored.contains(key)) {
+        stored.at(key).get_to(value);
+      } else {
+        missing.emplace_back(key);
+      }
+    });
+  } catch (const nlohmann::json::exception& e) {
+    throw std::runtime_error("map " + record.name + ": stored parameters are unreadable: " + e.what());
+  }
+  return missing;
 }
 
 }  // namespace
@@ -27,6 +82,8 @@ const char* MappingService::version() { return RMAP_VERSION; }
 MappingService::MappingService(Config config)
     : config_(std::move(config)), viewers_(metrics_, config_.limits.viewer_send_queue_bytes) {
   store_ = store::Store::open(config_.data_dir);
+  // Event ids are never reused, so the id of this start's event exceeds every earlier epoch.
+  epoch_ = store_->appendEvent({0, "", "rmapd_start", nowNs(), nlohmann::json{{"version", version()}}.dump()});
   metrics_.messages_durable = store_->messageCount();
   const auto start = std::chrono::steady_clock::now();
   for (const store::MapRecord& record : store_->maps()) {
@@ -52,6 +109,8 @@ MappingService::~MappingService() {
   if (tick_thread_.joinable()) tick_thread_.join();
   committer_.reset();  // completions post to the workers, so drain it first
   std::lock_guard lock(maps_mutex_);
+  // Stopped here, not by their destructors: callbacks still queued hold sessions, which hold workers.
+  for (auto& [name, worker] : maps_) worker->stop();
   maps_.clear();
 }
 
@@ -70,7 +129,23 @@ std::shared_ptr<MapWorker> MappingService::makeWorker(const store::MapRecord& re
     }
   }
   if (!map) {
-    map = std::make_unique<map3d::CuboidMap>(record.resolution_m, config_.maps.occupancy, config_.maps.fusion);
+    // Replaying the log must rebuild the map the clients saw: with the parameters it was created with.
+    map3d::OccupancyParams occupancy = config_.maps.occupancy;
+    map3d::FusionParams fusion = config_.maps.fusion;
+    const std::vector<std::string> missing = readMapParams(record, occupancy, fusion);
+    if (!missing.empty()) {
+      spdlog::warn("map {}: stored without {}; the config's values are used", record.name,
+                   nlohmann::json(missing).dump());
+    }
+    map = std::make_unique<map3d::CuboidMap>(record.resolution_m, occupancy, fusion);
+  }
+  if (recover) {
+    const nlohmann::json kept = mapParamsJson(map->occupancyParams(), map->fusionParams());
+    const nlohmann::json configured = mapParamsJson(config_.maps.occupancy, config_.maps.fusion);
+    if (kept != configured) {
+      spdlog::warn("map {} keeps the parameters it was created with {}; the config's {} apply to new maps only",
+                   record.name, kept.dump(), configured.dump());
+    }
   }
   auto worker = std::make_shared<MapWorker>(record.name, std::move(map), applied_id, config_, *store_, metrics_,
                                             [this](const RobotPose& pose) { onPose(pose); });
@@ -97,10 +172,9 @@ std::shared_ptr<MapWorker> MappingService::makeWorker(const store::MapRecord& re
 std::shared_ptr<MapWorker> MappingService::openMap(const std::string& name, double resolution_m) {
   std::lock_guard lock(maps_mutex_);
   if (const auto it = maps_.find(name); it != maps_.end()) return it->second;
-  nlohmann::json params{{"fusion_tolerance_log_odds", config_.maps.fusion.tolerance_log_odds},
-                        {"max_range_m", config_.maps.occupancy.max_range_m}};
-  const store::MapRecord record = store_->ensureMap(
-      {name, resolution_m > 0.0 ? resolution_m : config_.maps.resolution_m, params.dump(), nowNs()});
+  const store::MapRecord record =
+      store_->ensureMap({name, resolution_m > 0.0 ? resolution_m : config_.maps.resolution_m,
+                         mapParamsJson(config_.maps.occupancy, config_.maps.fusion).dump(), nowNs()});
   auto worker = makeWorker(record, false);
   worker->start();
   maps_.emplace(name, worker);
@@ -121,34 +195,92 @@ std::vector<std::shared_ptr<MapWorker>> MappingService::maps() const {
   return out;
 }
 
+void MappingService::apply(MapWorker& map, int64_t log_id, std::shared_ptr<const v1::RobotMessage> message,
+                           std::string robot_id, std::function<void()> applied) {
+  {
+    std::lock_guard lock(applying_mutex_);
+    applying_.try_emplace(log_id);
+  }
+  map.post(log_id, std::move(message), std::move(robot_id), [this, log_id, applied = std::move(applied)] {
+    if (applied) applied();
+    appliedDone(log_id);
+  });
+}
+
+void MappingService::whenApplied(int64_t log_id, std::function<void()> fn) {
+  {
+    // Completions come in log order, so the first copy was handed to apply() before a duplicate
+    // of it asks here: a log id not being applied is in its map already.
+    std::lock_guard lock(applying_mutex_);
+    if (const auto it = applying_.find(log_id); it != applying_.end()) {
+      it->second.push_back(std::move(fn));
+      return;
+    }
+  }
+  fn();
+}
+
+void MappingService::appliedDone(int64_t log_id) {
+  std::vector<std::function<void()>> waiting;
+  {
+    std::lock_guard lock(applying_mutex_);
+    auto node = applying_.extract(log_id);
+    if (!node.empty()) waiting = std::move(node.mapped());
+  }
+  for (const auto& fn : waiting) fn();
+}
+
 uint64_t MappingService::robotConnected(const std::string& robot_id, const std::string& map,
                                         const std::string& sensors_json,
                                         const std::shared_ptr<RobotSession>& session) {
-  std::shared_ptr<RobotSession> previous;
-  {
-    std::lock_guard lock(robots_mutex_);
-    std::weak_ptr<RobotSession>& slot = sessions_[robot_id];
-    previous = slot.lock();
-    slot = session;
-  }
-  if (previous && previous != session) {
-    previous->closeWithError("replaced", "robot " + robot_id + " connected again on another stream");
-  }
   store::RobotRecord record;
   record.robot_id = robot_id;
   record.map = map;
   record.sensors_json = sensors_json;
   record.first_seen_ns = record.last_seen_ns = nowNs();
+  std::shared_ptr<RobotSession> previous;
+  {
+    std::lock_guard lock(robots_mutex_);
+    Connected& slot = sessions_[robot_id];
+    previous = slot.session.lock();
+    slot = {session, record};
+  }
+  if (previous && previous != session) {
+    previous->closeWithError("replaced", "robot " + robot_id + " connected again on another stream");
+  }
   store_->upsertRobot(record);
   return store_->lastSeq(robot_id);
 }
 
 void MappingService::robotDisconnected(const std::string& robot_id, const RobotSession* session) {
-  std::lock_guard lock(robots_mutex_);
-  const auto it = sessions_.find(robot_id);
-  if (it == sessions_.end()) return;
-  const auto current = it->second.lock();
-  if (!current || current.get() == session) sessions_.erase(it);
+  std::optional<store::RobotRecord> last;
+  {
+    std::lock_guard lock(robots_mutex_);
+    const auto it = sessions_.find(robot_id);
+    if (it == sessions_.end()) return;
+    const auto current = it->second.session.lock();
+    if (current && current.get() != session) return;  // replaced: the newer stream owns the record
+    if (current && current->lastSeenNs() > it->second.record.last_seen_ns) {
+      last = it->second.record;
+      last->last_seen_ns = current->lastSeenNs();
+    }
+    sessions_.erase(it);
+  }
+  if (last) store_->upsertRobot(*last);
+}
+
+void MappingService::persistLastSeen() {
+  std::vector<store::RobotRecord> changed;
+  {
+    std::lock_guard lock(robots_mutex_);
+    for (auto& [robot_id, connected] : sessions_) {
+      const auto session = connected.session.lock();
+      if (!session || session->lastSeenNs() <= connected.record.last_seen_ns) continue;
+      connected.record.last_seen_ns = session->lastSeenNs();
+      changed.push_back(connected.record);
+    }
+  }
+  for (const store::RobotRecord& record : changed) store_->upsertRobot(record);
 }
 
 size_t MappingService::robotConnections() const {
@@ -156,26 +288,32 @@ size_t MappingService::robotConnections() const {
   return sessions_.size();
 }
 
-std::vector<RobotStatus> MappingService::robots() const {
-  std::vector<RobotStatus> out;
-  for (const store::RobotRecord& record : store_->robots()) {
-    RobotStatus status{record, false, std::nullopt};
-    std::lock_guard lock(robots_mutex_);
-    status.connected = sessions_.count(record.robot_id) > 0;
-    if (const auto it = last_poses_.find(record.robot_id); it != last_poses_.end()) status.last_pose = it->second;
-    out.push_back(std::move(status));
+RobotStatus MappingService::status(const store::RobotRecord& record) const {
+  RobotStatus status{record, false, std::nullopt};
+  if (const auto it = sessions_.find(record.robot_id); it != sessions_.end()) {
+    status.connected = true;
+    // The store's value trails the stream by up to kLastSeenPersistPeriod.
+    if (const auto session = it->second.session.lock()) {
+      status.record.last_seen_ns = std::max(status.record.last_seen_ns, session->lastSeenNs());
+    }
   }
+  if (const auto it = last_poses_.find(record.robot_id); it != last_poses_.end()) status.last_pose = it->second;
+  return status;
+}
+
+std::vector<RobotStatus> MappingService::robots() const {
+  const std::vector<store::RobotRecord> records = store_->robots();
+  std::vector<RobotStatus> out;
+  std::lock_guard lock(robots_mutex_);
+  for (const store::RobotRecord& record : records) out.push_back(status(record));
   return out;
 }
 
 std::optional<RobotStatus> MappingService::robot(const std::string& robot_id) const {
-  std::optional<store::RobotRecord> record = store_->robot(robot_id);
+  const std::optional<store::RobotRecord> record = store_->robot(robot_id);
   if (!record) return std::nullopt;
-  RobotStatus status{*record, false, std::nullopt};
   std::lock_guard lock(robots_mutex_);
-  status.connected = sessions_.count(robot_id) > 0;
-  if (const auto it = last_poses_.find(robot_id); it != last_poses_.end()) status.last_pose = it->second;
-  return status;
+  return status(*record);
 }
 
 void MappingService::onPose(const RobotPose& pose) {
@@ -187,6 +325,7 @@ void MappingService::onPose(const RobotPose& pose) {
 }
 
 void MappingService::tickLoop() {
+  auto last_seen_persisted = std::chrono::steady_clock::now();
   std::unique_lock lock(tick_mutex_);
   while (!tick_wake_.wait_for(lock, std::chrono::milliseconds(config_.viewer_tick_ms), [&] { return stopping_; })) {
     lock.unlock();
@@ -194,6 +333,14 @@ void MappingService::tickLoop() {
       viewers_.tick(maps());
     } catch (const std::exception& e) {
       spdlog::error("viewer tick: {}", e.what());
+    }
+    if (std::chrono::steady_clock::now() - last_seen_persisted >= kLastSeenPersistPeriod) {
+      last_seen_persisted = std::chrono::steady_clock::now();
+      try {
+        persistLastSeen();
+      } catch (const std::exception& e) {
+        spdlog::error("robots' last seen times not stored: {}", e.what());
+      }
     }
     lock.lock();
   }
@@ -203,6 +350,7 @@ MetricsGauges MappingService::gauges() const {
   MetricsGauges g;
   g.robot_connections = robotConnections();
   g.viewer_connections = viewers_.viewers();
+  if (connection_counter_) g.http_connections = connection_counter_();
   g.commit_queue_messages = committer_->queuedMessages();
   g.commit_queue_bytes = committer_->queuedBytes();
   for (const auto& worker : maps()) {

@@ -7,11 +7,13 @@
 
 #include <atomic>
 #include <condition_variable>
+#include <functional>
 #include <map>
 #include <memory>
 #include <mutex>
 #include <string>
 #include <thread>
+#include <unordered_map>
 #include <vector>
 
 #include "app/config.h"
@@ -27,7 +29,7 @@ class RobotSession;
 
 /// A connected or known robot as the API reports it.
 struct RobotStatus {
-  store::RobotRecord record;
+  store::RobotRecord record;  ///< last_seen_ns includes the open stream's latest message
   bool connected = false;
   std::optional<RobotPose> last_pose;
 };
@@ -43,6 +45,11 @@ class MappingService {
   MappingService& operator=(const MappingService&) = delete;
 
   static const char* version();
+  /// Identifies this start of the server over the life of the store: larger
+  /// than that of every earlier start (it is the id of a durable start event).
+  /// Map and tile versions restart with each start, so (epoch, version) is
+  /// what never repeats, e.g. in ETags.
+  int64_t epoch() const { return epoch_; }
   const Config& config() const { return config_; }
   Metrics& metrics() { return metrics_; }
   store::Store& store() { return *store_; }
@@ -55,6 +62,16 @@ class MappingService {
   std::shared_ptr<MapWorker> findMap(const std::string& name) const;
   std::vector<std::shared_ptr<MapWorker>> maps() const;
 
+  /// Hands a durable message to its map's worker; `applied` runs on the
+  /// worker once the message is in the map.
+  void apply(MapWorker& map, int64_t log_id, std::shared_ptr<const v1::RobotMessage> message,
+             std::string robot_id, std::function<void()> applied);
+  /// Runs `fn` once the logged message `log_id` is in its map: at once when it
+  /// already is (applied, or recovered at start), else on the worker thread
+  /// right after it is applied. For acks of duplicates, which must not
+  /// overtake the first copy.
+  void whenApplied(int64_t log_id, std::function<void()> fn);
+
   /// Registers a robot's stream (an older stream of the same robot is closed)
   /// and returns its highest durable sequence number.
   uint64_t robotConnected(const std::string& robot_id, const std::string& map, const std::string& sensors_json,
@@ -63,23 +80,42 @@ class MappingService {
   std::vector<RobotStatus> robots() const;
   std::optional<RobotStatus> robot(const std::string& robot_id) const;
   size_t robotConnections() const;
+  /// Writes the latest message time of connected robots to the store, where
+  /// it changed (also done every second by the tick thread and at disconnect).
+  void persistLastSeen();
 
+  /// Source of the open-connection gauge (e.g. net::Server::connections);
+  /// set it before serving. Without one the gauge reads 0.
+  void setConnectionCounter(std::function<size_t()> counter) { connection_counter_ = std::move(counter); }
   MetricsGauges gauges() const;
 
  private:
+  /// A robot's open stream and its robot record as last written to the store.
+  struct Connected {
+    std::weak_ptr<RobotSession> session;
+    store::RobotRecord record;
+  };
+
   std::shared_ptr<MapWorker> makeWorker(const store::MapRecord& record, bool recover);
+  void appliedDone(int64_t log_id);
+  RobotStatus status(const store::RobotRecord& record) const;  ///< needs robots_mutex_
   void onPose(const RobotPose& pose);
   void tickLoop();
 
   Config config_;
   Metrics metrics_;
   std::unique_ptr<store::Store> store_;
+  int64_t epoch_ = 0;
   ViewerHub viewers_;
   mutable std::mutex maps_mutex_;
   std::map<std::string, std::shared_ptr<MapWorker>> maps_;
+  std::mutex applying_mutex_;
+  /// Log ids handed to workers and not yet applied, with what waits for them.
+  std::unordered_map<int64_t, std::vector<std::function<void()>>> applying_;
   mutable std::mutex robots_mutex_;
-  std::map<std::string, std::weak_ptr<RobotSession>> sessions_;
+  std::map<std::string, Connected> sessions_;
   std::map<std::string, RobotPose> last_poses_;
+  std::function<size_t()> connection_counter_;
   std::unique_ptr<store::GroupCommitter> committer_;
   std::mutex tick_mutex_;
   std::condition_variable tick_wake_;

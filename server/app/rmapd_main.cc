@@ -75,6 +75,7 @@ int main(int argc, char** argv) {
     options.io_threads = config.io_threads;
     options.max_body_bytes = config.limits.max_body_bytes;
     rmap::net::Server server(options, handlers);
+    service.setConnectionCounter([&server] { return server.connections(); });
     server.start();
     const std::string host = config.listen_host.find(':') != std::string::npos ? "[" + config.listen_host + "]"
                                                                                  : config.listen_host;

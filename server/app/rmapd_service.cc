@@ -3,6 +3,7 @@
 #include "app/robot_session.h"
 #include "app/viewer_hub.h"
 #include "net/json_error.h"
+#include "net/ws_handshake.h"
 
 namespace rmap::app {
 
@@ -20,10 +21,7 @@ net::WsAccept refuse(const net::Request& request, int status, const std::string&
 
 /// Echo "rmap.v1" when the client offered subprotocols (browsers require one of theirs back).
 std::string chooseSubprotocol(const net::Request& request) {
-  const auto offered = request.find(http::field::sec_websocket_protocol);
-  if (offered == request.end()) return {};
-  const std::string_view value(offered->value().data(), offered->value().size());
-  return value.find(kSubprotocol) != std::string_view::npos ? std::string(kSubprotocol) : std::string();
+  return net::offersSubprotocol(request, kSubprotocol) ? std::string(kSubprotocol) : std::string();
 }
 
 }  // namespace

@@ -92,12 +92,14 @@ void RobotSession::onMessage(std::string data, bool binary) {
     }
     return handleHello(message->hello());
   }
-  if (const std::string problem = checkDataMessage(*message, service_.config().limits); !problem.empty()) {
+  if (const std::string problem = checkDataMessage(*message, service_.config().limits, map_->map().grid());
+      !problem.empty()) {
     return reject("invalid_message", problem, message->seq(), false);
   }
   if (!takeRateToken()) {
     return reject("rate_limited", "more than the allowed messages per second; resend later", message->seq(), false);
   }
+  last_seen_ns_.store(nowNs(), std::memory_order_relaxed);
   handleData(std::move(data), std::move(message), received);
 }
 
@@ -171,10 +173,14 @@ void RobotSession::handleData(std::string frame, std::shared_ptr<v1::RobotMessag
           spdlog::error("robot {}: message {} not stored: {}", self->robot_id_, seq, text);
           return self->finish(seq, false, received, "the message could not be stored; it was not acknowledged");
         }
-        if (result.duplicate) return self->finish(seq, true, received, nullptr);
+        if (result.duplicate) {
+          // Acked = durable and in the map: the first copy may still be waiting for its worker.
+          return self->service_.whenApplied(result.id,
+                                            [self, seq, received] { self->finish(seq, true, received, nullptr); });
+        }
         self->service_.metrics().messages_durable.fetch_add(1, std::memory_order_relaxed);
-        map->post(result.id, message, self->robot_id_,
-                  [self, seq, received] { self->finish(seq, false, received, nullptr); });
+        self->service_.apply(*map, result.id, message, self->robot_id_,
+                             [self, seq, received] { self->finish(seq, false, received, nullptr); });
       });
   if (!queued) finish(seq, false, received, "the server is overloaded (store queue full); resend later");
 }

@@ -31,6 +31,8 @@ class RobotSession : public net::WsHandler, public std::enable_shared_from_this<
   /// Ends the stream with a fatal error (e.g. the robot connected again elsewhere).
   void closeWithError(const std::string& code, const std::string& message);
   const std::string& robotId() const { return robot_id_; }
+  /// Unix time (ns) of the latest data message accepted on this stream, 0 before the first.
+  int64_t lastSeenNs() const { return last_seen_ns_.load(std::memory_order_relaxed); }
 
  private:
   void handleHello(const v1::Hello& hello);
@@ -50,6 +52,7 @@ class RobotSession : public net::WsHandler, public std::enable_shared_from_this<
   std::atomic<size_t> in_flight_{0};
   std::atomic<bool> paused_{false};
   std::atomic<bool> closed_{false};
+  std::atomic<int64_t> last_seen_ns_{0};  ///< one relaxed store per message: no store write on this path
   double rate_tokens_ = 0.0;
   std::chrono::steady_clock::time_point rate_refill_;
 };

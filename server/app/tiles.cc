@@ -12,20 +12,22 @@ int32_t floorDiv(int64_t a, int64_t b) { return static_cast<int32_t>(a >= 0 ? a 
 
 }  // namespace
 
-void tileCellRange(const TileKey& key, map3d::CellKey& min, map3d::CellKey& max) {
+bool tileCellRange(const TileKey& key, map3d::CellKey& min, map3d::CellKey& max) {
   const int64_t edge = tileEdgeBaseCells(key.level);
   const int32_t xyz[3] = {key.x, key.y, key.z};
   for (int a = 0; a < 3; ++a) {
-    const int64_t lo = xyz[a] * edge;
-    const int64_t hi = lo + edge - 1;
-    min[a] = static_cast<int32_t>(std::clamp<int64_t>(lo, -map3d::kCellLimit, map3d::kCellLimit - 1));
-    max[a] = static_cast<int32_t>(std::clamp<int64_t>(hi, -map3d::kCellLimit, map3d::kCellLimit - 1));
+    const int64_t lo = std::max<int64_t>(xyz[a] * edge, -map3d::kCellLimit);
+    const int64_t hi = std::min<int64_t>(xyz[a] * edge + edge - 1, map3d::kCellLimit - 1);
+    if (lo > hi) return false;
+    min[a] = static_cast<int32_t>(lo);
+    max[a] = static_cast<int32_t>(hi);
   }
+  return true;
 }
 
 std::vector<map3d::CuboidBox> tileCuboids(const map3d::CuboidMap& map, const TileKey& key) {
   map3d::CellKey min, max;
-  tileCellRange(key, min, max);
+  if (!tileCellRange(key, min, max)) return {};
   return map.levelOfDetail(key.level, min, max);
 }
 

@@ -41,8 +41,9 @@ struct TileVersion {
 /// Base-cell edge of a tile at `level`.
 inline int64_t tileEdgeBaseCells(int level) { return int64_t{kTileEdgeCells} << level; }
 
-/// Inclusive base-cell range of a tile.
-void tileCellRange(const TileKey& key, map3d::CellKey& min, map3d::CellKey& max);
+/// Inclusive base-cell range of a tile, clipped to the addressable cells.
+/// @return false (min, max unspecified) when the tile holds no addressable cell
+bool tileCellRange(const TileKey& key, map3d::CellKey& min, map3d::CellKey& max);
 
 /// Cuboids of one tile (at the tile's level of detail).
 std::vector<map3d::CuboidBox> tileCuboids(const map3d::CuboidMap& map, const TileKey& key);

@@ -82,10 +82,18 @@ class Grid {
   double resolution() const { return resolution_m_; }
 
   /// Cell index of one coordinate; same arithmetic as OctoMap's coordToKey.
-  int32_t index(double coord_m) const { return static_cast<int32_t>(std::floor(inv_resolution_ * coord_m)); }
+  /// Coordinates outside the addressable range are clamped to its edge cells
+  /// (NaN gives the lowest cell).
+  int32_t index(double coord_m) const {
+    const double scaled = std::floor(inv_resolution_ * coord_m);
+    return scaled >= kCellLimit ? kCellLimit - 1 : scaled >= -kCellLimit ? static_cast<int32_t>(scaled) : -kCellLimit;
+  }
 
-  /// False for NaN/inf or coordinates outside the addressable range.
-  bool cellChecked(const Eigen::Vector3f& p, CellKey& out) const {
+  /// False for NaN/inf or coordinates outside the addressable range. Float
+  /// points are widened to double first, so a double query of the same
+  /// coordinate lands in the same cell.
+  template <class Scalar>
+  bool cellChecked(const Eigen::Matrix<Scalar, 3, 1>& p, CellKey& out) const {
     for (int a = 0; a < 3; ++a) {
       const double scaled = std::floor(inv_resolution_ * static_cast<double>(p[a]));
       if (!(scaled >= -kCellLimit && scaled < kCellLimit)) return false;  // also rejects NaN

@@ -307,8 +307,9 @@ void CuboidMap::setCuboids(std::span<const CuboidBox> boxes) {
 // ---------------------------------------------------------------- reading
 
 CellQuery CuboidMap::query(const Eigen::Vector3d& point_m) const {
+  // Not rounded to float: that can move a point across a cell edge.
   CellKey cell;
-  if (!grid_.cellChecked(point_m.cast<float>(), cell)) return {};
+  if (!grid_.cellChecked(point_m, cell)) return {};
   return queryCell(cell);
 }
 
@@ -383,8 +384,8 @@ std::vector<CuboidBox> CuboidMap::queryBox(const Eigen::AlignedBox3d& box_m, siz
   if (box_m.isEmpty() || !box_m.min().allFinite() || !box_m.max().allFinite()) return out;
   CellKey min, max;
   for (int a = 0; a < 3; ++a) {
-    min[a] = static_cast<int32_t>(std::clamp<double>(grid_.index(box_m.min()[a]), -kCellLimit, kCellLimit - 1));
-    max[a] = static_cast<int32_t>(std::clamp<double>(grid_.index(box_m.max()[a]), -kCellLimit, kCellLimit - 1));
+    min[a] = grid_.index(box_m.min()[a]);
+    max[a] = grid_.index(box_m.max()[a]);
   }
   forEachCuboid(min, max, [&](const CuboidBox& c) {
     if (out.size() >= limit) return false;

@@ -3,8 +3,11 @@
 #include <boost/asio/dispatch.hpp>
 #include <boost/asio/post.hpp>
 #include <boost/asio/steady_timer.hpp>
+#include <boost/asio/write.hpp>
 #include <boost/beast/core/bind_handler.hpp>
 #include <boost/beast/core/flat_buffer.hpp>
+#include <boost/beast/core/string.hpp>
+#include <boost/beast/http/rfc7230.hpp>
 #include <boost/beast/http/parser.hpp>
 #include <boost/beast/http/read.hpp>
 #include <boost/beast/http/write.hpp>
@@ -12,12 +15,15 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdint>
+#include <iterator>
 #include <limits>
 #include <optional>
 #include <string>
+#include <string_view>
 
 #include "net/json_error.h"
 #include "net/peer.h"
+#include "net/ws_handshake.h"
 #include "net/ws_session.h"
 
 namespace rmap::net {
@@ -41,6 +47,49 @@ void finalize(Response& response, unsigned version, bool request_keep_alive) {
   if (response.find(http::field::server) == response.end()) response.set(http::field::server, "rmapd");
   if (!response.has_content_length() && !response.chunked()) response.prepare_payload();
 }
+
+/// Why a request whose header parsed cannot be served, as the error that
+/// answers it (the connection then closes), or nullopt.
+/// - Host: HTTP/1.1 requires exactly one, and no version allows two
+///   (RFC 9112 §3.2).
+/// - Transfer-Encoding: a body length that two parties may judge differently
+///   is how requests are smuggled past a proxy. Beast rejects it next to a
+///   Content-Length, but takes a request whose last coding is not chunked
+///   as having no body, so its body would be read as the next request
+///   (RFC 9112 §6.1 asks for a 400); HTTP/1.0 has no Transfer-Encoding; and
+///   only chunked is decoded, so other codings get 501 rather than reaching
+///   the Service still encoded.
+/// - Expect: only 100-continue is known (RFC 9110 §10.1.1); HTTP/1.0 servers
+///   ignore the field.
+std::optional<Response> headerError(const Request& request, bool chunked) {
+  const unsigned version = request.version();
+  const size_t hosts = request.count(http::field::host);
+  if (hosts > 1 || (hosts == 0 && version >= 11)) {
+    return jsonError(http::status::bad_request, "bad_request", "an HTTP/1.1 request needs exactly one Host field",
+                     version);
+  }
+  if (const size_t codings = request.count(http::field::transfer_encoding); codings > 0) {
+    if (version < 11 || !chunked) {
+      return jsonError(http::status::bad_request, "bad_request",
+                       "Transfer-Encoding needs HTTP/1.1 and chunked as the last coding", version);
+    }
+    const http::token_list list{request[http::field::transfer_encoding]};
+    if (codings > 1 || std::next(list.begin()) != list.end()) {
+      return jsonError(http::status::not_implemented, "not_implemented", "the only transfer coding served is chunked",
+                       version);
+    }
+  }
+  const auto expect = request.find(http::field::expect);
+  if (version >= 11 && expect != request.end() && !beast::iequals(expect->value(), "100-continue")) {
+    return jsonError(http::status::expectation_failed, "expectation_failed", "only 100-continue is supported",
+                     version);
+  }
+  return std::nullopt;
+}
+
+/// The interim answer a client sending Expect: 100-continue waits for
+/// before it sends the body.
+constexpr std::string_view kContinue = "HTTP/1.1 100 Continue\r\n\r\n";
 
 using Clock = std::chrono::steady_clock;
 
@@ -97,18 +146,47 @@ class HttpSession final : public Session, public std::enable_shared_from_this<Ht
     armIdleTimer(deadline_);
   }
 
+  /// Reads the header first: the request may have to be refused (or, with
+  /// Expect: 100-continue, invited) before its body is read.
   void readRequest() {
     const ServerOptions& options = state_->options;
     parser_.emplace();
     parser_->header_limit(
         static_cast<std::uint32_t>(std::min<size_t>(options.max_header_bytes, std::numeric_limits<std::uint32_t>::max())));
+    // A declared Content-Length over this fails the header read (413) before
+    // any of the body is read.
     parser_->body_limit(options.max_body_bytes);
     deadline_ = Clock::now() + options.idle_timeout;
-    http::async_read(socket_, buffer_, *parser_, beast::bind_front_handler(&HttpSession::onRead, shared_from_this()));
+    http::async_read_header(socket_, buffer_, *parser_,
+                            beast::bind_front_handler(&HttpSession::onHeader, shared_from_this()));
   }
 
-  void onRead(beast::error_code ec, size_t /*bytes*/) {
-    if (!ec) return handleRequest();
+  void onHeader(beast::error_code ec, size_t /*bytes*/) {
+    if (ec) return failRead(ec);
+    const Request& request = parser_->get();
+    if (auto error = headerError(request, parser_->chunked())) return closeWith(std::move(*error));
+    if (parser_->is_done()) return handleRequest();
+    // headerError() let through no Expect but 100-continue.
+    if (request.version() < 11 || request.find(http::field::expect) == request.end()) return readBody();
+    asio::async_write(socket_, asio::buffer(kContinue.data(), kContinue.size()),
+                      [self = shared_from_this()](beast::error_code write_ec, size_t) {
+                        if (write_ec) return self->closeSocket();
+                        self->readBody();
+                      });
+  }
+
+  /// Within the deadline readRequest() set: the whole request must arrive in
+  /// one idle timeout.
+  void readBody() {
+    http::async_read(socket_, buffer_, *parser_, beast::bind_front_handler(&HttpSession::onBody, shared_from_this()));
+  }
+
+  void onBody(beast::error_code ec, size_t /*bytes*/) {
+    if (ec) return failRead(ec);
+    handleRequest();
+  }
+
+  void failRead(const beast::error_code& ec) {
     const unsigned version = parser_->get().version();
     if (ec == http::error::body_limit) {
       return closeWith(jsonError(http::status::payload_too_large, "payload_too_large",
@@ -136,30 +214,29 @@ class HttpSession final : public Session, public std::enable_shared_from_this<Ht
       response = state_->service.handleHttp(request, peer_);
     } catch (...) {
       // The message stays generic: exception texts are not for remote peers.
-      response = internalError(request);
+      response = internalError(request.version(), request.keep_alive());
     }
     finalize(response, request.version(), request.keep_alive());
     write(std::move(response));
   }
 
   void upgrade(Request request) {
+    if (auto error = handshakeError(request)) return closeWith(std::move(*error));
     WsAccept accept;
     try {
       accept = state_->service.acceptWebSocket(request, peer_);
     } catch (...) {
-      accept.refusal = internalError(request);
+      accept.refusal = internalError(request.version(), request.keep_alive());
     }
     if (!accept.handler) {
       finalize(accept.refusal, request.version(), request.keep_alive());
       return write(std::move(accept.refusal));
     }
+    // RFC 6455 §4.2.2: the server selects one of the client's items, whole;
+    // anything else would make the client fail the handshake.
+    if (!offersSubprotocol(request, accept.subprotocol)) accept.subprotocol.clear();
     idle_timer_.cancel();  // the WebSocket stream runs its own timeouts
     startWebSocketSession(std::move(socket_), std::move(count_), peer_, state_, std::move(accept), std::move(request));
-  }
-
-  static Response internalError(const Request& request) {
-    return jsonError(http::status::internal_server_error, "internal_error", "internal server error",
-                     request.version(), request.keep_alive());
   }
 
   /// Sends an error response after which the request stream cannot be

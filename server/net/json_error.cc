@@ -17,4 +17,9 @@ Response jsonError(boost::beast::http::status status, const std::string& code, c
   return response;
 }
 
+Response internalError(unsigned http_version, bool keep_alive) {
+  return jsonError(boost::beast::http::status::internal_server_error, "internal_error", "internal server error",
+                   http_version, keep_alive);
+}
+
 }  // namespace rmap::net

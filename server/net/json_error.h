@@ -14,4 +14,8 @@ namespace rmap::net {
 Response jsonError(boost::beast::http::status status, const std::string& code, const std::string& message,
                    unsigned http_version = 11, bool keep_alive = false);
 
+/// The one 500 of the server: code "internal_error", a fixed message. What
+/// went wrong belongs in the log, never in a response (it may name files or SQL).
+Response internalError(unsigned http_version = 11, bool keep_alive = false);
+
 }  // namespace rmap::net

@@ -88,6 +88,11 @@ struct Server::Impl {
       return;
     }
     if (state->connections.load() < state->options.max_connections) {
+      // Replies are small and often come in pairs (a WebSocket frame, then
+      // the next): with Nagle the second waits for the client's delayed ACK,
+      // 40 ms on Linux. Failure only costs latency.
+      error_code ignored;
+      socket.set_option(tcp::no_delay(true), ignored);
       startHttpSession(std::move(socket), state);
     }  // else the socket closes right here
     accept();

@@ -2,8 +2,9 @@
 /// @file server.h
 /// One listening port for HTTP/1.1 (keep-alive) and WebSocket, on a pool of
 /// I/O threads (Boost.Beast on Asio). Requests are parsed with bounded header
-/// and body sizes; malformed or oversize requests get a JSON error response
-/// (see json_error.h) without reaching the Service.
+/// and body sizes; malformed or oversize requests (ambiguous body framing and
+/// WebSocket handshakes that cannot succeed included) get a JSON error
+/// response (see json_error.h) without reaching the Service.
 
 #include <chrono>
 #include <cstdint>
@@ -21,12 +22,16 @@ struct ServerOptions {
   size_t max_header_bytes = 16u << 10;
   size_t max_body_bytes = 64u << 20;  ///< larger bodies → 413
   /// A connection idle (no complete request / no frame) this long is closed.
-  /// HTTP: each read or write must complete within it. WebSocket: the server
-  /// pings after half of it, and closes when nothing (not even the pong)
-  /// arrived for all of it.
+  /// HTTP: each request (header and body) and each response write must
+  /// complete within it. WebSocket: the server pings after half of it, and
+  /// closes when nothing (not even the pong) arrived for all of it; while
+  /// the application paused reading, bytes waiting unread count as arrived.
   std::chrono::seconds idle_timeout{120};
   /// Further connections are accepted and closed at once.
   size_t max_connections = 4096;
+  /// stop() gives each open WebSocket this long to answer its close frame
+  /// (1001, going away) before its socket is closed.
+  std::chrono::milliseconds close_timeout{1000};
 };
 
 class Server {
@@ -42,8 +47,11 @@ class Server {
   ///         (a Server runs once)
   void start();
   /// Closes the listener and every connection, joins the threads. Idempotent.
-  /// Not from an I/O thread (it joins them). WebSocket handlers get onClose;
-  /// WsConnections they still hold refuse sends from then on.
+  /// Not from an I/O thread (it joins them). HTTP connections close at once;
+  /// open WebSockets get a close frame (1001, going away) in place of their
+  /// queued frames, and are closed when the peer answered it or after
+  /// close_timeout. WebSocket handlers get onClose; WsConnections they still
+  /// hold refuse sends from then on.
   void stop();
   /// The bound port (after start).
   uint16_t port() const;

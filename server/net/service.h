@@ -60,7 +60,9 @@ struct WsAccept {
   /// Null refuses the upgrade: `refusal` is sent as the HTTP response.
   std::shared_ptr<WsHandler> handler;
   Response refusal;
-  /// Echoed in Sec-WebSocket-Protocol when not empty.
+  /// Echoed in Sec-WebSocket-Protocol when it is one of the items the client
+  /// offered, compared whole (see ws_handshake.h); otherwise no subprotocol
+  /// is selected, as RFC 6455 §4.2.2 asks.
   std::string subprotocol;
   /// Larger incoming frames close the connection with 1009 (message too big).
   size_t max_frame_bytes = 16u << 20;
@@ -75,7 +77,8 @@ class Service {
   virtual ~Service() = default;
   /// Answers a complete HTTP request (body read within the size limit).
   virtual Response handleHttp(Request& request, const Peer& peer) = 0;
-  /// Decides on a WebSocket upgrade request.
+  /// Decides on a WebSocket upgrade request; malformed ones (see
+  /// ws_handshake.h) are refused before they get here.
   virtual WsAccept acceptWebSocket(const Request& request, const Peer& peer) = 0;
 };
 

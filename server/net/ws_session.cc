@@ -3,6 +3,7 @@
 #include <boost/asio/buffer.hpp>
 #include <boost/asio/dispatch.hpp>
 #include <boost/asio/post.hpp>
+#include <boost/asio/steady_timer.hpp>
 #include <boost/beast/core/bind_handler.hpp>
 #include <boost/beast/core/buffers_to_string.hpp>
 #include <boost/beast/core/flat_buffer.hpp>
@@ -22,6 +23,10 @@ namespace websocket = beast::websocket;
 /// Close code when a handler throws (RFC 6455 §7.4.1, internal error).
 constexpr uint16_t kInternalError = 1011;
 
+/// A read buffer grown past this by a large message is given back to the
+/// allocator instead of being kept for the connection's lifetime.
+constexpr size_t kKeptReadBufferBytes = 64u << 10;
+
 class WsSession final : public Session, public WsDriver, public std::enable_shared_from_this<WsSession> {
  public:
   WsSession(asio::ip::tcp::socket socket, ConnectionCount count, Peer peer, std::shared_ptr<ServerState> state,
@@ -31,12 +36,14 @@ class WsSession final : public Session, public WsDriver, public std::enable_shar
         ws_(std::move(socket)),
         peer_(std::move(peer)),
         handler_(std::move(accept.handler)),
-        max_send_queue_bytes_(accept.max_send_queue_bytes) {
+        max_send_queue_bytes_(accept.max_send_queue_bytes),
+        timeouts_(websocket::stream_base::timeout::suggested(beast::role_type::server)),
+        pause_timer_(ws_.get_executor()),
+        close_timer_(ws_.get_executor()) {
     // Server-side pings at half the idle timeout keep quiet but live peers
     // open; a peer silent for the whole timeout is dropped.
-    auto timeouts = websocket::stream_base::timeout::suggested(beast::role_type::server);
-    timeouts.idle_timeout = state_->options.idle_timeout;
-    ws_.set_option(timeouts);
+    timeouts_.idle_timeout = state_->options.idle_timeout;
+    ws_.set_option(timeouts_);
     ws_.set_option(websocket::stream_base::decorator(
         [subprotocol = std::move(accept.subprotocol)](websocket::response_type& response) {
           response.set(http::field::server, "rmapd");
@@ -64,7 +71,7 @@ class WsSession final : public Session, public WsDriver, public std::enable_shar
   }
 
   void shutdown() override {
-    asio::post(ws_.get_executor(), [self = shared_from_this()] { self->finish(); });
+    asio::post(ws_.get_executor(), [self = shared_from_this()] { self->goAway(); });
   }
 
   void flushQueue() override {
@@ -87,10 +94,11 @@ class WsSession final : public Session, public WsDriver, public std::enable_shar
   /// Delivers the message read while paused, if any, then keeps one read
   /// outstanding unless paused (so a paused client fills its TCP window).
   void pump() {
-    while (!finished_ && !channel_->paused()) {
+    while (!finished_ && !closing_ && !channel_->paused()) {
       if (!pending_) {
         if (!reading_) {
           reading_ = true;
+          unwatch();
           ws_.async_read(buffer_, beast::bind_front_handler(&WsSession::onRead, shared_from_this()));
         }
         return;
@@ -99,6 +107,7 @@ class WsSession final : public Session, public WsDriver, public std::enable_shar
       pending_.reset();
       callHandler([&] { handler_->onMessage(std::move(message.data), message.binary); });
     }
+    if (!finished_ && !closing_ && !reading_) watch();
   }
 
   void onRead(beast::error_code ec, size_t /*bytes*/) {
@@ -108,12 +117,62 @@ class WsSession final : public Session, public WsDriver, public std::enable_shar
     if (ec) return finish();
     pending_ = WsChannel::Frame{beast::buffers_to_string(buffer_.data()), ws_.got_binary()};
     buffer_.consume(buffer_.size());
+    if (buffer_.capacity() > kKeptReadBufferBytes) buffer_.shrink_to_fit();
     pump();
+  }
+
+  // Paused reading. Beast sees pongs (and any frame) only while a read is
+  // pending, so its idle timeout would drop a healthy peer the application
+  // paused. It is suspended meanwhile, and this watch keeps its rule: ping
+  // every half idle timeout, and close when nothing arrived for a whole one.
+  // What arrived is what waits unread in the socket; a peer with bytes
+  // waiting is judged by Beast again once reading resumes, and one whose
+  // host vanished fails the pings' writes.
+
+  void watch() {
+    if (watching_) return;
+    watching_ = true;
+    silent_ticks_ = 0;
+    auto paused = timeouts_;
+    paused.idle_timeout = websocket::stream_base::none();
+    ws_.set_option(paused);
+    armWatch();
+  }
+
+  void unwatch() {
+    if (!watching_) return;
+    watching_ = false;
+    pause_timer_.cancel();
+    ws_.set_option(timeouts_);  // the read about to start restarts Beast's timer
+  }
+
+  void armWatch() {
+    pause_timer_.expires_after(timeouts_.idle_timeout / 2);
+    pause_timer_.async_wait([self = shared_from_this()](beast::error_code ec) {
+      if (!ec) self->onWatchTick();
+    });
+  }
+
+  void onWatchTick() {
+    if (finished_ || closing_ || !watching_) return;
+    beast::error_code ec;
+    const size_t waiting = ws_.next_layer().available(ec);
+    if (ec) return finish();
+    silent_ticks_ = waiting > 0 ? 0 : silent_ticks_ + 1;
+    if (silent_ticks_ >= 2) return finish();  // as Beast's timeout: the socket closes, no close frame
+    if (!pinging_) {
+      pinging_ = true;
+      ws_.async_ping({}, [self = shared_from_this()](beast::error_code ping_ec) {
+        self->pinging_ = false;
+        if (ping_ec && !self->closing_) self->finish();  // a close aborts the ping: not an error then
+      });
+    }
+    armWatch();
   }
 
   /// Starts the next write unless the queue is empty; one at a time.
   void writeNext() {
-    if (finished_) return;
+    if (finished_ || closing_) return;
     WsChannel::CloseRequest close;
     switch (channel_->next(writing_frame_, close)) {
       case WsChannel::Next::kFrame:
@@ -123,9 +182,7 @@ class WsSession final : public Session, public WsDriver, public std::enable_shar
                         beast::bind_front_handler(&WsSession::onWrite, shared_from_this()));
         return;
       case WsChannel::Next::kClose:
-        writing_ = true;
-        ws_.async_close(websocket::close_reason(static_cast<websocket::close_code>(close.code), close.reason),
-                        [self = shared_from_this()](beast::error_code) { self->finish(); });
+        startClose(websocket::close_reason(static_cast<websocket::close_code>(close.code), close.reason));
         return;
       case WsChannel::Next::kIdle:
         return;
@@ -137,6 +194,28 @@ class WsSession final : public Session, public WsDriver, public std::enable_shar
     if (ec) return finish();
     channel_->written(writing_frame_.data.size());
     writeNext();
+  }
+
+  /// The close handshake; Beast lets it overlap a write still running, and
+  /// reads the peer's frames up to its close frame itself. Nothing is
+  /// written or delivered after it.
+  void startClose(const websocket::close_reason& reason) {
+    closing_ = true;
+    ws_.async_close(reason, [self = shared_from_this()](beast::error_code) { self->finish(); });
+  }
+
+  /// Server::stop(): the queued frames are dropped (a slow reader could hold
+  /// them for long) and a close frame says why, unless a close handshake
+  /// already runs; either way close_timeout bounds it.
+  void goAway() {
+    if (finished_) return;
+    if (!opened_) return finish();  // mid-handshake: nothing to close politely
+    channel_->detach();
+    close_timer_.expires_after(state_->options.close_timeout);
+    close_timer_.async_wait([self = shared_from_this()](beast::error_code ec) {
+      if (!ec) self->finish();
+    });
+    if (!closing_) startClose(websocket::close_reason(websocket::close_code::going_away, "server stopping"));
   }
 
   /// Runs a handler callback; a throwing handler gets its connection closed.
@@ -155,6 +234,8 @@ class WsSession final : public Session, public WsDriver, public std::enable_shar
     if (finished_) return;
     finished_ = true;
     if (channel_) channel_->detach();
+    pause_timer_.cancel();
+    close_timer_.cancel();
     beast::error_code ignored;
     ws_.next_layer().close(ignored);
     if (!opened_) return;
@@ -173,6 +254,9 @@ class WsSession final : public Session, public WsDriver, public std::enable_shar
   const Peer peer_;
   std::shared_ptr<WsHandler> handler_;
   const size_t max_send_queue_bytes_;
+  websocket::stream_base::timeout timeouts_;  ///< while reading is not paused
+  asio::steady_timer pause_timer_;  ///< the watch while paused (see watch())
+  asio::steady_timer close_timer_;  ///< bounds the close handshake of goAway()
   Request upgrade_;  ///< kept until the handshake completes
   beast::flat_buffer buffer_;
   std::shared_ptr<WsChannel> channel_;
@@ -181,7 +265,11 @@ class WsSession final : public Session, public WsDriver, public std::enable_shar
   bool reading_ = false;
   bool writing_ = false;
   bool opened_ = false;
+  bool closing_ = false;  ///< async_close started
   bool finished_ = false;
+  bool watching_ = false;  ///< paused with no read pending: Beast's idle timeout suspended
+  bool pinging_ = false;  ///< a ping of the watch is being written
+  int silent_ticks_ = 0;  ///< watch ticks in a row with nothing waiting in the socket
   std::optional<ServerState::Handle> handle_;
 };
 

@@ -8,6 +8,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "rmap/v1/map_api.pb.h"
+
 namespace rmap::app {
 namespace {
 
@@ -172,12 +174,13 @@ TEST(SetListenAddress, RejectsMalformedAddressesAndKeepsTheConfig) {
 }
 
 TEST(SetListenAddress, RejectsUnbalancedOrEmptyBrackets) {
-  GTEST_SKIP() << "bug: config.cc:97 strips brackets only when both are present and never checks the host, so "
-                  "'[::1:8080' sets listen_host '[::1' and '[]:8080' sets an empty host instead of throwing";
-  Config config;
-  EXPECT_THROW(setListenAddress("[::1:8080", config), std::invalid_argument);
-  EXPECT_THROW(setListenAddress("::1]:8080", config), std::invalid_argument);
-  EXPECT_THROW(setListenAddress("[]:8080", config), std::invalid_argument);
+  for (const std::string bad : {"[::1:8080", "::1]:8080", "[]:8080", "[:8080", "]:8080", "[[::1]]:8080",
+                                "[::1]x:8080", "::1:8080", "[::1]]:8080"}) {
+    Config config;
+    EXPECT_THROW(setListenAddress(bad, config), std::invalid_argument) << bad;
+    EXPECT_EQ(config.listen_host, Config{}.listen_host) << bad;
+    EXPECT_EQ(config.listen_port, Config{}.listen_port) << bad;
+  }
 }
 
 TEST(Validate, AcceptsTheDefaults) { EXPECT_NO_THROW(validate(Config{})); }
@@ -215,6 +218,40 @@ TEST(Validate, RejectsBadCounts) {
   EXPECT_THROW(validate(config), std::invalid_argument);
   config = Config{};
   config.viewer_tick_ms = 9;
+  EXPECT_THROW(validate(config), std::invalid_argument);
+  config = Config{};
+  config.log_level = "verbose";
+  EXPECT_THROW(validate(config), std::invalid_argument);
+}
+
+TEST(Validate, ZeroSizeLimitsAreRefusedNotReadAsUnlimited) {
+  for (size_t LimitsConfig::*limit :
+       {&LimitsConfig::max_frame_bytes, &LimitsConfig::max_body_bytes, &LimitsConfig::max_points_per_cloud,
+        &LimitsConfig::max_batch_points, &LimitsConfig::max_in_flight_per_robot,
+        &LimitsConfig::viewer_send_queue_bytes, &LimitsConfig::max_box_cuboids}) {
+    Config config;
+    config.limits.*limit = 0;
+    EXPECT_THROW(validate(config), std::invalid_argument);
+  }
+}
+
+TEST(Validate, ABatchOfMaxBatchPointsMustFitInTheBodyLimit) {
+  Config config;
+  for (const size_t points : {size_t{1}, size_t{5}, size_t{1000}, size_t{100000}}) {
+    v1::OccupancyBatchRequest request;
+    for (size_t i = 0; i < 3 * points; ++i) request.add_xyz_m(1.5);
+    EXPECT_EQ(batchRequestBytes(points), request.ByteSizeLong()) << points;
+    config.limits.max_batch_points = points;
+    config.limits.max_body_bytes = request.ByteSizeLong();
+    EXPECT_NO_THROW(validate(config)) << points;
+    config.limits.max_body_bytes -= 1;
+    EXPECT_THROW(validate(config), std::invalid_argument) << points;
+  }
+  EXPECT_EQ(batchRequestBytes(0), 0u);
+  config = Config{};
+  config.limits.max_batch_points = 10'000'000;  // 240 MB of doubles against 64 MiB
+  EXPECT_THROW(validate(config), std::invalid_argument);
+  config.limits.max_batch_points = SIZE_MAX;
   EXPECT_THROW(validate(config), std::invalid_argument);
 }
 

@@ -58,7 +58,9 @@ void setOrientation(v1::Pose3& pose, double w, double x, double y, double z) {
   pose.mutable_orientation()->set_z(z);
 }
 
-std::string check(const v1::RobotMessage& message) { return checkDataMessage(message, LimitsConfig{}); }
+std::string check(const v1::RobotMessage& message, const LimitsConfig& limits = {}) {
+  return checkDataMessage(message, limits, map3d::Grid(0.1));
+}
 
 TEST(ValidName, AcceptsTheAllowedCharacters) {
   EXPECT_TRUE(validName("a"));
@@ -126,8 +128,8 @@ TEST(CheckCloud, RejectsIntensityCountMismatch) {
 TEST(CheckCloud, RejectsMorePointsThanTheLimit) {
   LimitsConfig limits;
   limits.max_points_per_cloud = 2;
-  EXPECT_EQ(checkDataMessage(cloudMessage({1, 2, 3, 4, 5, 6}), limits), "");
-  EXPECT_NE(checkDataMessage(cloudMessage({1, 2, 3, 4, 5, 6, 7, 8, 9}), limits), "");
+  EXPECT_EQ(check(cloudMessage({1, 2, 3, 4, 5, 6}), limits), "");
+  EXPECT_NE(check(cloudMessage({1, 2, 3, 4, 5, 6, 7, 8, 9}), limits), "");
 }
 
 TEST(CheckCloud, RejectsANonUnitQuaternion) {
@@ -217,9 +219,12 @@ TEST(CheckImage, RawImagesNeedWidthTimesHeightTimesChannelsBytes) {
 }
 
 TEST(CheckImage, RawSizeDoesNotWrapAround) {
-  GTEST_SKIP() << "bug: ingest.cc:92 computes width*height*3 in uint64_t without an overflow check; "
-                  "RGB8 4294853786x1431693603 wraps to 41258 bytes, so 41258 bytes of data are accepted";
-  EXPECT_NE(check(imageMessage(v1::CameraImage::RGB8, std::string(41258, 'x'), 4294853786u, 1431693603u)), "");
+  // 4294853786 × 1431693603 × 3 wraps to 41258 in 64 bits.
+  const std::string problem =
+      check(imageMessage(v1::CameraImage::RGB8, std::string(41258, 'x'), 4294853786u, 1431693603u));
+  EXPECT_NE(problem.find("too large"), std::string::npos) << problem;
+  // The largest MONO8 size does not overflow: it is refused for its data size only.
+  EXPECT_NE(check(imageMessage(v1::CameraImage::MONO8, "x", UINT32_MAX, UINT32_MAX)).find("bytes"), std::string::npos);
 }
 
 TEST(CheckImage, RejectsNoDataUnknownEncodingAndBadPose) {
@@ -250,6 +255,34 @@ TEST(CheckDataMessage, RejectsSeqZeroHelloAndNoBody) {
   v1::RobotMessage empty;
   empty.set_seq(1);
   EXPECT_NE(check(empty), "");
+}
+
+TEST(CheckDataMessage, RefusesSeqAboveInt64Max) {
+  v1::RobotMessage m = cloudMessage({1, 2, 3});
+  m.set_seq(uint64_t{1} << 63);
+  EXPECT_NE(check(m).find("seq"), std::string::npos) << check(m);
+  m.set_seq(UINT64_MAX);
+  EXPECT_NE(check(m), "");
+  m.set_seq(static_cast<uint64_t>(INT64_MAX));
+  EXPECT_EQ(check(m), "");
+}
+
+TEST(CheckCloud, RefusesASensorOriginOutsideTheAddressableRange) {
+  // At 0.1 m the cells end at ±3276.8 m; the points may lie outside (they are dropped), the origin not.
+  v1::RobotMessage m = cloudMessage({1, 2, 3, 5000, 0, 0});
+  m.mutable_cloud()->set_frame(v1::PointCloud::MAP);
+  v1::Vector3& origin = *m.mutable_cloud()->mutable_sensor_pose()->mutable_position_m();
+  origin.set_x(3276.7);
+  EXPECT_EQ(check(m), "");
+  origin.set_x(3276.8);
+  EXPECT_NE(check(m).find("outside the map's addressable range"), std::string::npos) << check(m);
+  origin.set_x(0.0);
+  origin.set_z(-1e300);  // finite in double, infinite as the float the map takes
+  EXPECT_NE(check(m), "");
+  // The range scales with the map's resolution.
+  origin.set_z(5000.0);
+  EXPECT_NE(check(m), "");
+  EXPECT_EQ(checkDataMessage(m, LimitsConfig{}, map3d::Grid(1.0)), "");
 }
 
 TEST(ToIsometry, AllZeroQuaternionIsIdentity) {

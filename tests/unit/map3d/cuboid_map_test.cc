@@ -277,6 +277,24 @@ TEST(CuboidMap, PointBoxRayAndLevelOfDetailQueries) {
   }
 }
 
+TEST(CuboidMap, PointQueryDoesNotRoundToFloatAtCellEdges) {
+  // Near 3000 m floats are 0.24 mm apart: 2999.99999 rounds to 3000.0f, one cell too far.
+  CuboidMap map(0.1);
+  const float below_edge = std::nextafter(3000.0f, 0.0f);
+  map.insertScan({2995.05f, 0.05f, 0.05f}, std::vector<Eigen::Vector3f>{{below_edge, 0.05f, 0.05f}});
+  ASSERT_EQ(map.queryCell({29999, 0, 0}).state, CellState::kOccupied);
+  ASSERT_EQ(map.queryCell({30000, 0, 0}).state, CellState::kUnknown);
+  EXPECT_EQ(map.query({2999.99999, 0.05, 0.05}).state, CellState::kOccupied);
+  EXPECT_EQ(map.query({3000.0, 0.05, 0.05}).state, CellState::kUnknown);
+  // The inserted float point itself, widened to double, is found where the insert put it.
+  EXPECT_EQ(map.query({double(below_edge), 0.05, 0.05}).cuboid.min.x, 29999);
+  // Beyond the addressable range (and far beyond int32 cells) is unknown, also for boxes.
+  EXPECT_EQ(map.query({3276.8, 0.0, 0.0}).state, CellState::kUnknown);
+  EXPECT_EQ(map.query({-1e300, 0.0, 0.0}).state, CellState::kUnknown);
+  const Eigen::AlignedBox3d everything(Eigen::Vector3d(-1e300, -1, -1), Eigen::Vector3d(1e300, 1, 1));
+  EXPECT_FALSE(map.queryBox(everything).empty());
+}
+
 TEST(CuboidMap, BadScansThrowAndChangeNothing) {
   CuboidMap map(0.1);
   insertAll(map, roomScans(1, 9));

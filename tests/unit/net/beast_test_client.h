@@ -22,6 +22,7 @@
 #include <cstdlib>
 #include <functional>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <thread>
 
@@ -125,6 +126,27 @@ class HttpClient {
   StringResponse read() {
     StringResponse response;
     http::read(socket_, buffer_, response);
+    return response;
+  }
+
+  /// The next response, or nullopt when none arrived within `timeout` (the
+  /// socket is then closed): for answers a server might wrongly hold back.
+  std::optional<StringResponse> readWithin(std::chrono::milliseconds timeout) {
+    StringResponse response;
+    boost::system::error_code ec;
+    bool done = false;
+    http::async_read(socket_, buffer_, response, [&](boost::system::error_code result, size_t) {
+      ec = result;
+      done = true;
+    });
+    io_.run_for(timeout);
+    const bool timed_out = !done;
+    if (timed_out) {
+      socket_.close();
+      io_.run();  // the read completes as aborted
+    }
+    io_.restart();
+    if (timed_out || ec) return std::nullopt;
     return response;
   }
 

@@ -4,6 +4,8 @@
 #include <mutex>
 #include <nlohmann/json.hpp>
 #include <stdexcept>
+#include <string>
+#include <vector>
 
 #include "beast_test_client.h"
 #include "net/server.h"
@@ -226,6 +228,172 @@ TEST_F(ServerHttp, ConnectionsOverTheLimitAreClosedAtOnce) {
   EXPECT_TRUE(second.closedByServer());
   EXPECT_EQ(first.get("/").result(), http::status::ok);
   EXPECT_EQ(server_->connections(), 1u);
+}
+
+TEST_F(ServerHttp, ExpectContinueGets100BeforeTheBodyIsSent) {
+  service_.http = [](Request& request, const Peer&) {
+    Response response{http::status::ok, request.version()};
+    response.body() = "got " + request.body();
+    return response;
+  };
+  start();
+  HttpClient client(port());
+  client.writeRaw("POST /ingest HTTP/1.1\r\nHost: x\r\nExpect: 100-continue\r\nContent-Length: 5\r\n\r\n");
+  const auto interim = client.readWithin(2000ms);
+  ASSERT_TRUE(interim) << "no 100 Continue: the server waits for a body the client holds back";
+  EXPECT_EQ(interim->result(), http::status::continue_);
+  client.writeRaw("hello");
+  const StringResponse response = client.read();
+  EXPECT_EQ(response.result(), http::status::ok);
+  EXPECT_EQ(response.body(), "got hello");
+  EXPECT_TRUE(response.keep_alive());
+  EXPECT_EQ(client.get("/next").result(), http::status::ok);  // the connection goes on
+}
+
+TEST_F(ServerHttp, ExpectContinueOverTheLimitGets413WithoutTheBody) {
+  std::atomic<int> calls{0};
+  service_.http = [&](Request& request, const Peer&) {
+    ++calls;
+    return Response{http::status::ok, request.version()};
+  };
+  ServerOptions options = testOptions();
+  options.max_body_bytes = 1024;
+  start(options);
+  HttpClient client(port());
+  client.writeRaw("POST /ingest HTTP/1.1\r\nHost: x\r\nExpect: 100-continue\r\nContent-Length: 1025\r\n\r\n");
+  const auto response = client.readWithin(2000ms);
+  ASSERT_TRUE(response);
+  EXPECT_EQ(response->result(), http::status::payload_too_large);
+  EXPECT_EQ(errorCode(*response), "payload_too_large");
+  EXPECT_EQ(calls.load(), 0);
+}
+
+TEST_F(ServerHttp, ExpectContinueWithoutABodyIsServedAtOnce) {
+  start();
+  HttpClient client(port());
+  client.writeRaw("POST /x HTTP/1.1\r\nHost: x\r\nExpect: 100-continue\r\nContent-Length: 0\r\n\r\n");
+  EXPECT_EQ(client.read().result(), http::status::ok);  // no interim answer first
+}
+
+TEST_F(ServerHttp, UnknownExpectationGets417) {
+  start();
+  HttpClient client(port());
+  client.writeRaw("POST /x HTTP/1.1\r\nHost: x\r\nExpect: teapot\r\nContent-Length: 1\r\n\r\nx");
+  const StringResponse response = client.read();
+  EXPECT_EQ(response.result(), http::status::expectation_failed);
+  EXPECT_EQ(errorCode(response), "expectation_failed");
+  EXPECT_TRUE(client.closedByServer());
+}
+
+/// Sends `head`, whose framing the server must refuse, followed by a request
+/// that would be served if the server misjudged where the first one ends.
+class SmugglingTest : public ServerHttp {
+ protected:
+  void SetUp() override {
+    service_.http = [this](Request& request, const Peer&) {
+      std::lock_guard lock(mutex_);
+      targets_.emplace_back(request.target());
+      return Response{http::status::ok, request.version()};
+    };
+    ServerOptions options = testOptions();
+    options.idle_timeout = std::chrono::seconds(1);  // a server that keeps the connection open fails, not hangs
+    start(options);
+  }
+  StringResponse send(const std::string& head, const std::string& body) {
+    HttpClient client(port());
+    client.writeRaw(head + body);
+    StringResponse response = client.read();
+    EXPECT_TRUE(client.closedByServer());
+    return response;
+  }
+  std::vector<std::string> targets() {
+    std::lock_guard lock(mutex_);
+    return targets_;
+  }
+
+  const std::string smuggled_ = "GET /smuggled HTTP/1.1\r\nHost: x\r\n\r\n";
+
+ private:
+  std::mutex mutex_;
+  std::vector<std::string> targets_;
+};
+
+TEST_F(SmugglingTest, TransferEncodingNotEndingInChunkedIs400) {
+  for (const char* coding : {"gzip", "chunked, gzip", "xchunked"}) {
+    const StringResponse response = send(
+        "POST /a HTTP/1.1\r\nHost: x\r\nTransfer-Encoding: " + std::string(coding) + "\r\n\r\n", smuggled_);
+    EXPECT_EQ(response.result(), http::status::bad_request) << coding;
+  }
+  EXPECT_TRUE(targets().empty());
+}
+
+TEST_F(SmugglingTest, ContentLengthNextToTransferEncodingIs400) {
+  const std::string chunked_body = "0\r\n\r\n";
+  const StringResponse response =
+      send("POST /a HTTP/1.1\r\nHost: x\r\nContent-Length: " + std::to_string(chunked_body.size() + smuggled_.size()) +
+               "\r\nTransfer-Encoding: chunked\r\n\r\n",
+           chunked_body + smuggled_);
+  EXPECT_EQ(response.result(), http::status::bad_request);
+  const StringResponse reversed =
+      send("POST /a HTTP/1.1\r\nHost: x\r\nTransfer-Encoding: chunked\r\nContent-Length: 3\r\n\r\n",
+           chunked_body + smuggled_);
+  EXPECT_EQ(reversed.result(), http::status::bad_request);
+  const StringResponse conflicting =
+      send("POST /a HTTP/1.1\r\nHost: x\r\nContent-Length: 0\r\nContent-Length: 38\r\n\r\n", smuggled_);
+  EXPECT_EQ(conflicting.result(), http::status::bad_request);
+  EXPECT_TRUE(targets().empty());
+}
+
+TEST_F(SmugglingTest, TransferEncodingInHttp10Is400) {
+  const StringResponse response =
+      send("POST /a HTTP/1.0\r\nHost: x\r\nConnection: keep-alive\r\nTransfer-Encoding: chunked\r\n\r\n",
+           "0\r\n\r\n" + smuggled_);
+  EXPECT_EQ(response.result(), http::status::bad_request);
+  EXPECT_TRUE(targets().empty());
+}
+
+TEST_F(SmugglingTest, CodingsOtherThanChunkedGet501) {
+  const StringResponse response =
+      send("POST /a HTTP/1.1\r\nHost: x\r\nTransfer-Encoding: gzip, chunked\r\n\r\n", "0\r\n\r\n");
+  EXPECT_EQ(response.result(), http::status::not_implemented);
+  EXPECT_EQ(errorCode(response), "not_implemented");
+  EXPECT_TRUE(targets().empty());
+}
+
+TEST_F(SmugglingTest, ChunkedBodiesAreServed) {
+  HttpClient client(port());
+  client.writeRaw("POST /a HTTP/1.1\r\nHost: x\r\nTransfer-Encoding: chunked\r\n\r\n3\r\nabc\r\n0\r\n\r\n");
+  EXPECT_EQ(client.read().result(), http::status::ok);
+  EXPECT_EQ(client.get("/b").result(), http::status::ok);
+  EXPECT_EQ(targets(), (std::vector<std::string>{"/a", "/b"}));
+}
+
+TEST_F(SmugglingTest, Http11NeedsExactlyOneHost) {
+  EXPECT_EQ(send("GET /a HTTP/1.1\r\n\r\n", "").result(), http::status::bad_request);
+  EXPECT_EQ(send("GET /a HTTP/1.1\r\nHost: x\r\nHost: y\r\n\r\n", "").result(), http::status::bad_request);
+  EXPECT_TRUE(targets().empty());
+  HttpClient old(port());
+  old.writeRaw("GET /old HTTP/1.0\r\n\r\n");  // HTTP/1.0 may omit it
+  EXPECT_EQ(old.read().result(), http::status::ok);
+}
+
+TEST_F(ServerHttp, SlowHeaderIsCutAtTheIdleTimeout) {
+  ServerOptions options = testOptions();
+  options.idle_timeout = std::chrono::seconds(1);
+  start(options);
+  HttpClient client(port());
+  const auto begin = std::chrono::steady_clock::now();
+  // A byte every 200 ms keeps the connection busy, never idle: the request
+  // as a whole must still arrive within the timeout.
+  const std::string head = "GET / HTTP/1.1\r\nHost: x\r\nX-Slow: aaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaa";
+  boost::system::error_code ec;
+  for (size_t i = 0; i < head.size() && !ec; ++i) {
+    asio::write(client.socket(), asio::buffer(&head[i], 1), ec);
+    std::this_thread::sleep_for(200ms);
+  }
+  EXPECT_TRUE(ec || client.closedByServer());
+  EXPECT_LT(std::chrono::steady_clock::now() - begin, 3s);
+  EXPECT_TRUE(eventually([&] { return server_->connections() == 0; }));
 }
 
 }  // namespace

@@ -163,6 +163,50 @@ TEST_F(ServerWebSocket, SubprotocolIsEchoed) {
   EXPECT_EQ(response[http::field::server], "rmapd");
 }
 
+TEST_F(ServerWebSocket, SubprotocolIsEchoedOnlyWhenOfferedWhole) {
+  accept_.subprotocol = "rmap.v1";
+  start();
+  for (const std::string offer : {"rmap.v1x, bearer.abc", "bearer.rmap.v1", "xrmap.v1", "rmap.v1.2"}) {
+    WsClient client(port());
+    websocket::response_type response;
+    ASSERT_FALSE(client.handshake(response, offer));
+    EXPECT_EQ(response.count(http::field::sec_websocket_protocol), 0u) << offer;
+  }
+  WsClient spaced(port());
+  websocket::response_type response;
+  ASSERT_FALSE(spaced.handshake(response, "bearer.abc ,\trmap.v1 "));
+  EXPECT_EQ(response[http::field::sec_websocket_protocol], "rmap.v1");
+}
+
+TEST_F(ServerWebSocket, MalformedUpgradesAreRefusedBeforeTheService) {
+  std::atomic<int> asked{0};
+  service_.ws = [&, accept_all = service_.ws](const Request& request, const Peer& peer) {
+    ++asked;
+    return accept_all(request, peer);
+  };
+  start();
+  const std::string upgrade = "GET /ws HTTP/1.1\r\nHost: x\r\nConnection: Upgrade\r\nUpgrade: websocket\r\n";
+  const std::string key = "Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\n";
+  const auto answer = [&](const std::string& fields) {
+    HttpClient client(port());
+    client.writeRaw(upgrade + fields + "\r\n");
+    return client.read();
+  };
+  for (const std::string bad_key : {"", "Sec-WebSocket-Key: short==\r\n",
+                                    "Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25j!!==\r\n"}) {
+    const StringResponse response = answer(bad_key + "Sec-WebSocket-Version: 13\r\n");
+    EXPECT_EQ(response.result(), http::status::bad_request) << bad_key;
+    EXPECT_EQ(response[http::field::content_type], "application/json");
+  }
+  const StringResponse old_version = answer(key + "Sec-WebSocket-Version: 8\r\n");
+  EXPECT_EQ(old_version.result(), http::status::upgrade_required);
+  EXPECT_EQ(old_version[http::field::sec_websocket_version], "13");
+  EXPECT_EQ(answer(key).result(), http::status::upgrade_required);
+  EXPECT_EQ(asked.load(), 0);
+  EXPECT_EQ(answer(key + "Sec-WebSocket-Version: 13\r\n").result(), http::status::switching_protocols);
+  EXPECT_EQ(asked.load(), 1);
+}
+
 TEST_F(ServerWebSocket, RefusalIsAFailedHandshakeWithItsStatus) {
   service_.ws = [](const Request& request, const Peer&) {
     WsAccept refused;
@@ -192,6 +236,22 @@ TEST_F(ServerWebSocket, MessageOverTheLimitClosesWith1009) {
   EXPECT_EQ(client.ws.reason().code, websocket::close_code::too_big);
   EXPECT_TRUE(eventually([&] { return recorder(0)->closes() == 1; }));
   EXPECT_EQ(recorder(0)->messages().size(), 1u);
+}
+
+TEST_F(ServerWebSocket, FrameClaimingAHugeLengthIsRefusedFromItsHeader) {
+  accept_.max_frame_bytes = 1024;
+  start();
+  WsClient client(port());
+  client.handshake();
+  // A masked binary frame announcing 2^40 bytes, none of which follow: the
+  // server must answer from the header, neither waiting nor allocating.
+  std::string header = {'\x82', '\xff'};
+  for (int shift = 56; shift >= 0; shift -= 8) header += static_cast<char>((uint64_t{1} << 40) >> shift);
+  header += std::string("\x01\x02\x03\x04", 4);
+  asio::write(client.ws.next_layer(), asio::buffer(header));
+  EXPECT_EQ(client.readUntilClosed(), websocket::error::closed);
+  EXPECT_EQ(client.ws.reason().code, websocket::close_code::too_big);
+  EXPECT_TRUE(eventually([&] { return recorder(0)->closes() == 1; }));
 }
 
 TEST_F(ServerWebSocket, OnCloseOnceWhenTheClientVanishesMidStream) {
@@ -340,6 +400,153 @@ TEST_F(ServerWebSocket, PeerNotAnsweringPingsIsDroppedAfterTheIdleTimeout) {
   ASSERT_TRUE(eventually([&] { return recorder(0)->closes() == 1; }, 3000ms));
   EXPECT_GE(std::chrono::steady_clock::now() - begin, 900ms);
   EXPECT_EQ(server_->webSocketConnections(), 0u);
+}
+
+TEST_F(ServerWebSocket, RepliesOfSeveralSmallFramesAreNotHeldBack) {
+  // Two frames per message: with Nagle on the server's socket the second
+  // waits for the client's delayed ACK (40 ms on Linux) every round.
+  on_message_ = [](WsConnection& connection, const std::string& data, bool) {
+    connection.send(data, false);
+    connection.send("ack", false);
+  };
+  start();
+  WsClient client(port());
+  client.handshake();
+  client.ws.next_layer().set_option(tcp::no_delay(true));  // the client's side is not under test
+  constexpr int kRounds = 50;
+  const auto begin = std::chrono::steady_clock::now();
+  for (int i = 0; i < kRounds; ++i) {
+    client.send(std::to_string(i), false);
+    ASSERT_EQ(client.read().first, std::to_string(i));
+    ASSERT_EQ(client.read().first, "ack");
+  }
+  const auto per_round = (std::chrono::steady_clock::now() - begin) / kRounds;
+  EXPECT_LT(per_round, 10ms) << std::chrono::duration<double, std::milli>(per_round).count() << " ms per round";
+}
+
+/// Reads on a thread of its own (answering pings as it goes) until the
+/// connection ends.
+class BackgroundReader {
+ public:
+  explicit BackgroundReader(WsClient& client)
+      : thread_([this, &client] {
+          beast::flat_buffer buffer;
+          boost::system::error_code ec;
+          while (!ec) {
+            client.ws.read(buffer, ec);
+            if (ec) break;
+            std::lock_guard lock(mutex_);
+            messages_.push_back(beast::buffers_to_string(buffer.data()));
+            buffer.clear();
+          }
+          std::lock_guard lock(mutex_);
+          error_ = ec;
+          ended_ = true;
+        }) {}
+  ~BackgroundReader() {
+    if (thread_.joinable()) thread_.join();
+  }
+
+  bool ended() {
+    std::lock_guard lock(mutex_);
+    return ended_;
+  }
+  /// Waits for the end; the error that ended the connection.
+  boost::system::error_code join() {
+    if (thread_.joinable()) thread_.join();
+    return error_;
+  }
+  std::vector<std::string> messages() {
+    std::lock_guard lock(mutex_);
+    return messages_;
+  }
+
+ private:
+  std::mutex mutex_;
+  std::vector<std::string> messages_;
+  boost::system::error_code error_;
+  bool ended_ = false;
+  std::thread thread_;
+};
+
+TEST_F(ServerWebSocket, PausedReadingKeepsAPeerThatAnswersPings) {
+  on_message_ = [](WsConnection& connection, const std::string& data, bool) {
+    if (data == "pause") connection.pauseReading(true);
+  };
+  ServerOptions options = testOptions();
+  options.idle_timeout = std::chrono::seconds(1);
+  start(options);
+  WsClient client(port());
+  client.handshake();
+  client.send("pause", false);
+  const auto handler = recorder(0);
+  ASSERT_TRUE(eventually([&] { return handler->messages().size() == 1; }));
+  BackgroundReader reader(client);  // sends nothing but pongs from here on
+  std::this_thread::sleep_for(2500ms);
+  EXPECT_FALSE(reader.ended()) << "the server dropped a live peer it had paused";
+  EXPECT_EQ(handler->closes(), 0);
+
+  handler->connection()->pauseReading(false);
+  EXPECT_TRUE(handler->connection()->send("still here", false));
+  ASSERT_TRUE(eventually([&] { return reader.messages() == std::vector<std::string>{"still here"}; }));
+  std::this_thread::sleep_for(1500ms);  // Beast's own timeout again, the reader answering its pings
+  EXPECT_FALSE(reader.ended());
+  handler->connection()->close(1000, "done");
+  EXPECT_EQ(reader.join(), websocket::error::closed);
+  EXPECT_TRUE(eventually([&] { return handler->closes() == 1; }));
+}
+
+TEST_F(ServerWebSocket, PausedReadingStillDropsAPeerThatWentSilent) {
+  on_message_ = [](WsConnection& connection, const std::string& data, bool) {
+    if (data == "pause") connection.pauseReading(true);
+  };
+  ServerOptions options = testOptions();
+  options.idle_timeout = std::chrono::seconds(1);
+  start(options);
+  WsClient client(port());  // never reads again, so never answers a ping
+  client.handshake();
+  client.send("pause", false);
+  const auto handler = recorder(0);
+  ASSERT_TRUE(eventually([&] { return handler->messages().size() == 1; }));
+  const auto begin = std::chrono::steady_clock::now();
+  ASSERT_TRUE(eventually([&] { return handler->closes() == 1; }, 3000ms)) << "the handler never learnt of the end";
+  EXPECT_GE(std::chrono::steady_clock::now() - begin, 900ms);
+  EXPECT_EQ(server_->webSocketConnections(), 0u);
+}
+
+TEST_F(ServerWebSocket, StopSendsGoingAway) {
+  on_message_ = echo;
+  start();
+  WsClient client(port());
+  client.handshake();
+  openedConnection(0);
+  BackgroundReader reader(client);
+  const auto begin = std::chrono::steady_clock::now();
+  server_->stop();
+  EXPECT_LT(std::chrono::steady_clock::now() - begin, 500ms);  // the client answered at once
+  EXPECT_EQ(reader.join(), websocket::error::closed);
+  EXPECT_EQ(client.ws.reason().code, websocket::close_code::going_away);
+  EXPECT_EQ(recorder(0)->closes(), 1);
+}
+
+TEST_F(ServerWebSocket, StopWaitsForTheCloseAnswerOnlyUpToTheTimeout) {
+  accept_.max_send_queue_bytes = 64u << 20;
+  ServerOptions options = testOptions();
+  options.close_timeout = std::chrono::milliseconds(300);
+  start(options);
+  WsClient silent(port());  // does not read until the server has stopped
+  silent.handshake();
+  const auto connection = openedConnection(0);
+  // More than the socket buffers hold: the writer is stuck, and the close
+  // frame goes in place of what is still queued.
+  for (int i = 0; i < 64; ++i) connection->send(std::string(256u << 10, 'q'), true);
+  const auto begin = std::chrono::steady_clock::now();
+  server_->stop();
+  const auto took = std::chrono::steady_clock::now() - begin;
+  EXPECT_GE(took, 250ms);
+  EXPECT_LT(took, 1500ms);
+  EXPECT_EQ(recorder(0)->closes(), 1);
+  EXPECT_EQ(connection->queuedBytes(), 0u);
 }
 
 TEST_F(ServerWebSocket, CountsWebSocketConnections) {

@@ -1,0 +1,148 @@
+#include "app/http_api.h"
+
+#include <gtest/gtest.h>
+
+#include <boost/beast/http/field.hpp>
+#include <nlohmann/json.hpp>
+
+#include "service_test_support.h"
+
+namespace rmap::app {
+namespace {
+
+namespace http = boost::beast::http;
+using nlohmann::json;
+
+const net::Peer kLoopback{"127.0.0.1", 40000, true};
+
+/// An API over a service in a fresh data directory, in loopback-only mode (every request is admin).
+class HttpApiTest : public ::testing::Test {
+ protected:
+  net::Response call(http::verb method, const std::string& target,
+                     std::initializer_list<std::pair<http::field, std::string>> headers = {}) {
+    net::Request request{method, target, 11};
+    for (const auto& [field, value] : headers) request.set(field, value);
+    return api_.handle(request, kLoopback);
+  }
+  net::Response get(const std::string& target,
+                    std::initializer_list<std::pair<http::field, std::string>> headers = {}) {
+    return call(http::verb::get, target, headers);
+  }
+
+  store::TempDir dir_;
+  MappingService service_{testing::configIn(dir_.path())};
+  Authenticator auth_{AuthConfig{}};
+  HttpApi api_{service_, auth_};
+};
+
+std::string header(const net::Response& response, http::field field) {
+  const auto it = response.find(field);
+  return it == response.end() ? std::string() : std::string(it->value());
+}
+
+TEST_F(HttpApiTest, MethodNotAllowedNamesTheMethodsOfTheRoute) {
+  service_.openMap("lab", 0.0);
+  const struct {
+    http::verb method;
+    std::string target;
+    std::string allow;
+  } cases[] = {
+      {http::verb::post, "/v1/maps", "GET"},
+      {http::verb::delete_, "/v1/maps/lab", "GET"},
+      {http::verb::get, "/v1/maps/lab/occupancy:batch", "POST"},
+      {http::verb::put, "/v1/maps/lab/tiles/0/0/0/0", "GET"},
+      {http::verb::post, "/healthz", "GET"},
+      {http::verb::post, "/v1/loop-closures", "GET"},
+  };
+  for (const auto& c : cases) {
+    const net::Response response = call(c.method, c.target);
+    EXPECT_EQ(response.result_int(), 405) << c.target;
+    EXPECT_EQ(header(response, http::field::allow), c.allow) << c.target;
+    EXPECT_EQ(json::parse(response.body())["error"]["code"], "method_not_allowed") << c.target;
+  }
+  EXPECT_EQ(header(get("/v1/maps"), http::field::allow), "");
+}
+
+TEST_F(HttpApiTest, InternalErrorsAreGenericAndKeepTheDetailOutOfTheResponse) {
+  // A robot row whose sensors do not parse makes the handler throw a non-API exception.
+  service_.store().upsertRobot({"bot", "lab", "{secret detail", 1, 1, 0});
+  const net::Response response = get("/v1/robots/bot");
+  EXPECT_EQ(response.result_int(), 500);
+  const json body = json::parse(response.body());
+  EXPECT_EQ(body["error"]["code"], "internal_error");
+  EXPECT_EQ(body["error"]["message"], "internal server error");
+  EXPECT_EQ(response.body().find("secret"), std::string::npos) << response.body();
+  EXPECT_EQ(response.body().find("parse"), std::string::npos) << response.body();
+}
+
+TEST_F(HttpApiTest, LoopClosuresAreFilteredBeforeTheLimit) {
+  service_.openMap("lab", 0.0);
+  service_.openMap("hall", 0.0);
+  store::Store& store = service_.store();
+  std::vector<int64_t> loop_ids;
+  for (int i = 0; i < 12; ++i) {
+    const bool loop = i % 4 == 3;  // 3 of 12, each after three other events
+    const int64_t id = store.appendEvent({0, i == 11 ? "hall" : "lab", loop ? "loop_closure" : "note", i, "{}"});
+    if (loop) loop_ids.push_back(id);
+  }
+  const auto ids = [&](const std::string& target) {
+    std::vector<int64_t> out;
+    const json body = json::parse(get(target).body());
+    for (const json& e : body.at("loop_closures")) out.push_back(e.at("id").get<int64_t>());
+    return out;
+  };
+  EXPECT_EQ(ids("/v1/loop-closures?limit=2"), (std::vector<int64_t>{loop_ids[0], loop_ids[1]}));
+  EXPECT_EQ(ids("/v1/loop-closures?limit=2&since=" + std::to_string(loop_ids[1])),
+            (std::vector<int64_t>{loop_ids[2]}));
+  EXPECT_EQ(ids("/v1/loop-closures?limit=1&map=lab&since=" + std::to_string(loop_ids[0])),
+            (std::vector<int64_t>{loop_ids[1]}));
+  EXPECT_EQ(ids("/v1/loop-closures?limit=1&map=hall"), (std::vector<int64_t>{loop_ids[2]}));
+  EXPECT_EQ(ids("/v1/loop-closures?limit=100"), loop_ids);
+}
+
+TEST_F(HttpApiTest, MetricsReportOpenConnections) {
+  service_.setConnectionCounter([] { return size_t{7}; });
+  const net::Response response = get("/metrics");
+  ASSERT_EQ(response.result_int(), 200);
+  EXPECT_NE(("\n" + response.body()).find("\nrmap_http_connections 7\n"), std::string::npos) << response.body();
+}
+
+TEST(HttpApiRestart, TileETagsOfAnEarlierStartNeverMatch) {
+  store::TempDir dir;
+  {
+    const std::unique_ptr<store::Store> store = store::Store::open(dir.path());
+    store->ensureMap({"lab", 0.1, "{}", 1});
+    const v1::RobotMessage cloud = testing::smallCloud(1);
+    const store::MessageRecord record{"lab", "bot", 1, v1::RobotMessage::kCloud, 1, cloud.SerializeAsString()};
+    store->append({&record, 1});
+  }
+  const Authenticator auth{AuthConfig{}};
+  const auto tile = [&](MappingService& service, const std::string& if_none_match) {
+    HttpApi api(service, auth);
+    net::Request request{http::verb::get, "/v1/maps/lab/tiles/0/0/0/0", 11};
+    request.set(http::field::accept, "application/json");
+    if (!if_none_match.empty()) request.set(http::field::if_none_match, if_none_match);
+    return api.handle(request, kLoopback);
+  };
+  std::string before;  // rebuilt from the log, then snapshotted at the stop
+  {
+    MappingService service(testing::configIn(dir.path()));
+    const net::Response response = tile(service, "");
+    ASSERT_EQ(response.result_int(), 200);
+    EXPECT_EQ(json::parse(response.body())["epoch"], service.epoch());
+    before = header(response, http::field::etag);
+    EXPECT_EQ(tile(service, before).result_int(), 304);
+  }
+  MappingService service(testing::configIn(dir.path()));  // loads the snapshot: versions start again
+  const net::Response response = tile(service, before);
+  EXPECT_EQ(response.result_int(), 200) << "an ETag of the previous start validated a tile";
+  const std::string after = header(response, http::field::etag);
+  EXPECT_NE(after, before);
+  EXPECT_EQ(tile(service, after).result_int(), 304);
+  HttpApi api(service, auth);
+  net::Request request{http::verb::get, "/v1/maps/lab/tileset.json", 11};
+  EXPECT_EQ(json::parse(api.handle(request, kLoopback).body())["epoch"], service.epoch());
+}
+
+}  // namespace
+}  // namespace rmap::app

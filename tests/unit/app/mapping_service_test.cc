@@ -1,0 +1,157 @@
+#include "app/mapping_service.h"
+
+#include <gtest/gtest.h>
+
+#include <future>
+#include <nlohmann/json.hpp>
+
+#include "service_test_support.h"
+
+namespace rmap::app {
+namespace {
+
+/// Logs `message` of robot "bot" for map "lab" straight into the store.
+void logMessage(store::Store& store, const v1::RobotMessage& message) {
+  store::MessageRecord record{"lab", "bot", message.seq(), static_cast<int32_t>(message.body_case()), 1,
+                              message.SerializeAsString()};
+  ASSERT_FALSE(store.append({&record, 1}).at(0).duplicate);
+}
+
+TEST(MappingService, EpochGrowsWithEveryStart) {
+  store::TempDir dir;
+  int64_t first = 0;
+  {
+    const MappingService service(testing::configIn(dir.path()));
+    first = service.epoch();
+    EXPECT_GT(first, 0);
+  }
+  const MappingService service(testing::configIn(dir.path()));
+  EXPECT_GT(service.epoch(), first);
+}
+
+TEST(MappingService, NewMapsStoreEveryParameterThatShapesThem) {
+  store::TempDir dir;
+  Config config = testing::configIn(dir.path());
+  config.maps.occupancy.hit_log_odds = 0.5f;
+  config.maps.occupancy.max_range_m = 12.0;
+  config.maps.fusion.tolerance_log_odds = 0.0f;
+  MappingService service(config);
+  service.openMap("lab", 0.0);
+  const std::vector<store::MapRecord> maps = service.store().maps();
+  ASSERT_EQ(maps.size(), 1u);
+  const nlohmann::json params = nlohmann::json::parse(maps[0].params_json);
+  EXPECT_EQ(params.at("hit_log_odds").get<float>(), 0.5f);
+  EXPECT_EQ(params.at("miss_log_odds").get<float>(), config.maps.occupancy.miss_log_odds);
+  EXPECT_EQ(params.at("clamp_max_log_odds").get<float>(), config.maps.occupancy.clamp_max_log_odds);
+  EXPECT_EQ(params.at("max_range_m").get<double>(), 12.0);
+  EXPECT_EQ(params.at("fusion_tolerance_log_odds").get<float>(), 0.0f);
+  EXPECT_EQ(params.at("free_space_tracing"), "stop_at_freed");
+  EXPECT_EQ(params.at("sensor_model"), "beam");
+}
+
+TEST(MappingService, RecoveryRebuildsAMapWithItsStoredParametersNotTheConfigs) {
+  store::TempDir dir;
+  {
+    Config creation = testing::configIn(dir.path());
+    creation.maps.occupancy.hit_log_odds = 0.5f;
+    creation.maps.occupancy.miss_log_odds = -0.25f;
+    creation.maps.fusion.fuse_after_scans = 0;
+    MappingService service(creation);
+    service.openMap("lab", 0.2);
+    logMessage(service.store(), testing::smallCloud(1));
+  }  // no snapshot: the map was never applied anything in this process
+
+  const Config now = testing::configIn(dir.path());  // defaults: hit 0.85, miss -0.41
+  const MappingService service(now);
+  const std::shared_ptr<MapWorker> map = service.findMap("lab");
+  ASSERT_TRUE(map);
+  EXPECT_EQ(map->map().resolution(), 0.2);
+  EXPECT_EQ(map->map().occupancyParams().hit_log_odds, 0.5f);
+  EXPECT_EQ(map->map().occupancyParams().miss_log_odds, -0.25f);
+  EXPECT_EQ(map->map().fusionParams().fuse_after_scans, 0);
+  // The logged cloud was replayed with them: its end cell (1.05 m at 0.2 m) holds exactly one hit.
+  EXPECT_EQ(map->map().queryCell({5, 0, 0}).log_odds, 0.5f);
+  EXPECT_EQ(map->map().queryCell({2, 0, 0}).log_odds, -0.25f);
+}
+
+TEST(MappingService, MapsStoredWithoutSomeParametersTakeTheConfigsForThose) {
+  store::TempDir dir;
+  {
+    const std::unique_ptr<store::Store> store = store::Store::open(dir.path());
+    // What older versions stored.
+    store->ensureMap({"lab", 0.1, R"({"fusion_tolerance_log_odds":0.0,"max_range_m":0.5})", 1});
+    logMessage(*store, testing::smallCloud(1));
+  }
+  Config config = testing::configIn(dir.path());
+  config.maps.occupancy.hit_log_odds = 1.0f;
+  const MappingService service(config);
+  const map3d::CuboidMap& map = service.findMap("lab")->map();
+  EXPECT_EQ(map.occupancyParams().max_range_m, 0.5);
+  EXPECT_EQ(map.fusionParams().tolerance_log_odds, 0.0f);
+  EXPECT_EQ(map.occupancyParams().hit_log_odds, 1.0f);
+}
+
+TEST(MappingService, UnreadableStoredParametersStopTheStartNamingTheMap) {
+  store::TempDir dir;
+  {
+    const std::unique_ptr<store::Store> store = store::Store::open(dir.path());
+    store->ensureMap({"lab", 0.1, "{not json", 1});
+  }
+  try {
+    const MappingService service(testing::configIn(dir.path()));
+    ADD_FAILURE() << "started";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("lab"), std::string::npos) << e.what();
+  }
+}
+
+TEST(MappingService, WhenAppliedWaitsForTheMessageToBeInItsMap) {
+  store::TempDir dir;
+  MappingService service(testing::configIn(dir.path()));
+  const std::shared_ptr<MapWorker> map = service.openMap("lab", 0.0);
+  std::promise<void> release;
+  std::shared_future<void> released = release.get_future().share();
+  map->post(0, std::make_shared<v1::RobotMessage>(), "test", [released] { released.wait(); });
+  service.apply(*map, 7, std::make_shared<v1::RobotMessage>(testing::smallCloud(1)), "bot", nullptr);
+  std::promise<bool> waited;
+  std::future<bool> waited_result = waited.get_future();
+  service.whenApplied(7, [&] { waited.set_value(map->appliedId() == 7); });
+  EXPECT_EQ(waited_result.wait_for(std::chrono::milliseconds(100)), std::future_status::timeout);
+  // Not being applied (e.g. recovered at start): at once.
+  bool at_once = false;
+  service.whenApplied(3, [&] { at_once = true; });
+  EXPECT_TRUE(at_once);
+
+  release.set_value();
+  EXPECT_TRUE(waited_result.get());
+}
+
+TEST(MappingService, StopsItsWorkersEvenWhenSessionsStillHoldThem) {
+  store::TempDir dir;
+  std::shared_ptr<MapWorker> held;  // as a robot session with messages in flight would
+  {
+    MappingService service(testing::configIn(dir.path()));
+    held = service.openMap("lab", 0.0);
+    service.apply(*held, 1, std::make_shared<v1::RobotMessage>(testing::smallCloud(1)), "bot", nullptr);
+  }
+  // The final snapshot was written while the store was open, not when the last holder lets go.
+  const std::unique_ptr<store::Store> store = store::Store::open(dir.path());
+  const std::optional<store::Snapshot> snapshot = store->snapshot("lab");
+  ASSERT_TRUE(snapshot);
+  EXPECT_EQ(snapshot->last_message_id, 1);
+  held.reset();
+}
+
+TEST(MappingService, GaugesReadTheConnectionCounter) {
+  store::TempDir dir;
+  MappingService service(testing::configIn(dir.path()));
+  EXPECT_EQ(service.gauges().http_connections, 0u);
+  size_t open = 3;
+  service.setConnectionCounter([&open] { return open; });
+  EXPECT_EQ(service.gauges().http_connections, 3u);
+  open = 5;
+  EXPECT_EQ(service.gauges().http_connections, 5u);
+}
+
+}  // namespace
+}  // namespace rmap::app

@@ -1,0 +1,129 @@
+#include "app/robot_session.h"
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <future>
+#include <thread>
+
+#include "service_test_support.h"
+
+namespace rmap::app {
+namespace {
+
+using testing::RecordingConnection;
+
+class RobotSessionTest : public ::testing::Test {
+ protected:
+  /// Opens a session of robot "bot" on map "lab" and checks its Welcome.
+  void SetUp() override {
+    session_ = std::make_shared<RobotSession>(service_, Principal{Role::kAdmin, {}});
+    session_->onOpen(connection_);
+    v1::RobotMessage hello;
+    hello.mutable_hello()->set_robot_id("bot");
+    hello.mutable_hello()->set_map("lab");
+    session_->onMessage(hello.SerializeAsString(), true);
+    const std::vector<v1::ServerMessage> sent = connection_->sent();
+    ASSERT_EQ(sent.size(), 1u);
+    ASSERT_TRUE(sent[0].has_welcome());
+  }
+  void TearDown() override { session_->onClose(); }
+
+  void send(const v1::RobotMessage& message) { session_->onMessage(message.SerializeAsString(), true); }
+
+  store::TempDir dir_;
+  MappingService service_{testing::configIn(dir_.path())};
+  std::shared_ptr<RecordingConnection> connection_ = std::make_shared<RecordingConnection>();
+  std::shared_ptr<RobotSession> session_;
+};
+
+TEST_F(RobotSessionTest, DuplicateIsAckedOnlyAfterTheFirstCopyIsApplied) {
+  // Hold the map's worker so the first copy is durable but not yet in the map.
+  std::promise<void> release;
+  std::shared_future<void> released = release.get_future().share();
+  service_.findMap("lab")->post(0, std::make_shared<v1::RobotMessage>(), "test", [released] { released.wait(); });
+
+  send(testing::smallCloud(1));
+  send(testing::smallCloud(1));  // a resend, e.g. after a reconnect
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+  while (service_.metrics().messages_durable.load() < 1 && std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  EXPECT_EQ(service_.metrics().messages_durable.load(), 1u);
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));  // the duplicate's commit is done by now
+  EXPECT_EQ(connection_->sent().size(), 1u) << "an ack went out before the message was in the map";
+  EXPECT_EQ(service_.findMap("lab")->map().stats().scans, 0u);
+
+  release.set_value();
+  const std::vector<v1::ServerMessage> sent = connection_->waitFor(3);
+  ASSERT_EQ(sent.size(), 3u);
+  ASSERT_TRUE(sent[1].has_ack());
+  EXPECT_EQ(sent[1].ack().seq(), 1u);
+  EXPECT_FALSE(sent[1].ack().duplicate());
+  ASSERT_TRUE(sent[2].has_ack());
+  EXPECT_EQ(sent[2].ack().seq(), 1u);
+  EXPECT_TRUE(sent[2].ack().duplicate());
+  EXPECT_EQ(service_.findMap("lab")->map().stats().scans, 1u);
+}
+
+TEST_F(RobotSessionTest, DuplicateOfAnAppliedMessageIsAckedAtOnce) {
+  send(testing::smallCloud(1));
+  ASSERT_EQ(connection_->waitFor(2).size(), 2u);
+  send(testing::smallCloud(1));
+  const std::vector<v1::ServerMessage> sent = connection_->waitFor(3);
+  ASSERT_EQ(sent.size(), 3u);
+  EXPECT_TRUE(sent[2].ack().duplicate());
+}
+
+TEST_F(RobotSessionTest, LastSeenFollowsAcceptedMessagesAndIsStoredAtDisconnect) {
+  const int64_t hello_ns = service_.robot("bot")->record.last_seen_ns;
+  std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  send(testing::smallCloud(1));
+  ASSERT_EQ(connection_->waitFor(2).size(), 2u);
+  const int64_t seen_ns = service_.robot("bot")->record.last_seen_ns;
+  EXPECT_GT(seen_ns, hello_ns);
+  EXPECT_EQ(seen_ns, session_->lastSeenNs());
+  ASSERT_EQ(service_.robots().size(), 1u);
+  EXPECT_EQ(service_.robots()[0].record.last_seen_ns, seen_ns);
+
+  session_->onClose();
+  EXPECT_FALSE(service_.robot("bot")->connected);
+  EXPECT_EQ(service_.store().robot("bot")->last_seen_ns, seen_ns);
+}
+
+TEST_F(RobotSessionTest, PersistLastSeenWritesOnlyWhatChanged) {
+  send(testing::smallCloud(1));
+  ASSERT_EQ(connection_->waitFor(2).size(), 2u);
+  service_.persistLastSeen();
+  EXPECT_EQ(service_.store().robot("bot")->last_seen_ns, session_->lastSeenNs());
+}
+
+TEST_F(RobotSessionTest, CloudFromOutsideTheMapIsRefusedBeforeItIsStored) {
+  // 0.1 m cells end at ±3276.8 m.
+  send(testing::cloudMessage(1, {5000.0, 0.0, 0.0}, {{4999.0f, 0.0f, 0.0f}}));
+  const std::vector<v1::ServerMessage> sent = connection_->waitFor(2);
+  ASSERT_EQ(sent.size(), 2u);
+  ASSERT_TRUE(sent[1].has_error());
+  EXPECT_EQ(sent[1].error().code(), "invalid_message");
+  EXPECT_EQ(sent[1].error().seq(), 1u);
+  EXPECT_NE(sent[1].error().message().find("addressable range"), std::string::npos) << sent[1].error().message();
+  EXPECT_EQ(service_.store().messageCount(), 0u);
+  EXPECT_EQ(service_.store().lastSeq("bot"), 0u);
+}
+
+TEST_F(RobotSessionTest, SeqAbove2To63IsRefusedAndOthersInItsBatchAreStored) {
+  v1::RobotMessage huge = testing::smallCloud(uint64_t{1} << 63);
+  send(huge);
+  send(testing::smallCloud(1));
+  const std::vector<v1::ServerMessage> sent = connection_->waitFor(3);
+  ASSERT_EQ(sent.size(), 3u);
+  ASSERT_TRUE(sent[1].has_error());
+  EXPECT_EQ(sent[1].error().code(), "invalid_message");
+  EXPECT_EQ(sent[1].error().seq(), huge.seq());
+  ASSERT_TRUE(sent[2].has_ack());
+  EXPECT_EQ(sent[2].ack().seq(), 1u);
+  EXPECT_EQ(service_.store().messageCount(), 1u);
+}
+
+}  // namespace
+}  // namespace rmap::app
