@@ -1,6 +1,9 @@
 #!/usr/bin/env bash
-# Installs what rmap needs on Debian 12; apt-get runs only when a package is missing.
+# Installs what rmap needs on Debian 12; apt-get runs only when a package is missing,
+# npm only when the viewer's packages (web/node_modules) are missing or older than
+# web/package-lock.json.
 set -euo pipefail
+cd "$(dirname "$0")/.."
 
 packages=(
   build-essential cmake pkg-config
@@ -9,7 +12,11 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   libboost-dev libboost-system-dev libssl-dev
   libprotobuf-dev protobuf-compiler libsqlite3-dev libyaml-cpp-dev
+  chromium  # the browser tests of the viewer (tests/browser)
 )
+# Node.js and npm fetch and test the viewer. Debian's packages only when there is no npm:
+# over a NodeSource nodejs (which ships its own npm) they would conflict.
+command -v npm >/dev/null || packages+=(nodejs npm)
 
 missing=()
 for p in "${packages[@]}"; do
@@ -22,4 +29,11 @@ if ((${#missing[@]})); then
   echo "setup: installing ${missing[*]}"
   $sudo apt-get update -qq
   DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}"
+fi
+
+# npm writes node_modules/.package-lock.json last, so it dates a complete install; -ot is also
+# true when it does not exist.
+if [ -f web/package-lock.json ] && [ web/node_modules/.package-lock.json -ot web/package-lock.json ]; then
+  echo "setup: installing the viewer's packages (npm ci --prefix web)"
+  npm ci --prefix web --no-audit --no-fund
 fi

@@ -72,6 +72,8 @@ void readMaps(const YAML::Node& node, MapDefaults& maps) {
 
 }  // namespace
 
+std::filesystem::path defaultWebRoot() { return RMAP_WEB_ROOT; }
+
 size_t batchRequestBytes(size_t points) {
   const size_t payload = points * kBatchBytesPerPoint;
   size_t length_bytes = 1;  // varint: 7 bits per byte
@@ -84,6 +86,7 @@ void loadConfigFile(const std::filesystem::path& file, Config& config) {
     const YAML::Node root = YAML::LoadFile(file.string());
     if (const YAML::Node listen = root["listen"]) setListenAddress(listen.as<std::string>(), config);
     if (const YAML::Node dir = root["data_dir"]) config.data_dir = dir.as<std::string>();
+    if (const YAML::Node dir = root["web_root"]) config.web_root = dir.as<std::string>();
     read(root, "io_threads", config.io_threads);
     read(root, "snapshot_interval_s", config.snapshot_interval_s);
     read(root, "viewer_tick_ms", config.viewer_tick_ms);
@@ -129,6 +132,7 @@ void setListenAddress(const std::string& host_port, Config& config) {
 
 void validate(const Config& config) {
   if (config.io_threads < 1) throw std::invalid_argument("io_threads must be >= 1");
+  if (config.web_root.empty()) throw std::invalid_argument("web_root must not be empty");
   static const std::set<std::string> kLogLevels{"trace", "debug", "info", "warn", "error", "critical", "off"};
   if (!kLogLevels.contains(config.log_level)) {
     throw std::invalid_argument("log_level must be one of trace, debug, info, warn, error, critical, off (got \"" +

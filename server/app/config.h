@@ -47,10 +47,16 @@ struct MapDefaults {
   int insert_threads = 1;     ///< threads tracing the rays of one cloud
 };
 
+/// The build's web viewer directory (RMAP_WEB_ROOT, set by CMake; by default
+/// the source tree's web/), so a build tree serves the viewer as it is.
+std::filesystem::path defaultWebRoot();
+
 struct Config {
   std::string listen_host = "127.0.0.1";
   uint16_t listen_port = 8080;
   std::filesystem::path data_dir = "rmap-data";
+  /// The web viewer's files (index.html, app/, node_modules/three), served at /.
+  std::filesystem::path web_root = defaultWebRoot();
   int io_threads = 2;
   /// Seconds between map snapshots (recovery replays only the log after them).
   double snapshot_interval_s = 60.0;

@@ -45,7 +45,8 @@ nlohmann::json mapJson(const MapWorker& worker) {
   return out;
 }
 
-HttpApi::HttpApi(MappingService& service, const Authenticator& auth) : service_(service), auth_(auth) {}
+HttpApi::HttpApi(MappingService& service, const Authenticator& auth)
+    : service_(service), auth_(auth), static_files_(service.config().web_root) {}
 
 net::Response HttpApi::handle(net::Request& request, const net::Peer& peer) {
   const auto start = std::chrono::steady_clock::now();
@@ -65,6 +66,13 @@ net::Response HttpApi::handle(net::Request& request, const net::Peer& peer) {
     spdlog::error("{} {}: {}", std::string(request.method_string()), std::string(request.target()), e.what());
     response = net::internalError(request.version(), request.keep_alive());
   }
+  // A HEAD answer carries the length of the body it omits, whatever the route; a body would be
+  // read as the start of the next response on a kept-alive connection.
+  if (request.method() == http::verb::head && !response.body().empty()) {
+    const size_t length = response.body().size();
+    response.body().clear();
+    response.content_length(length);
+  }
   metrics.http_requests.fetch_add(1, std::memory_order_relaxed);
   if (response.result_int() >= 400) metrics.http_errors.fetch_add(1, std::memory_order_relaxed);
   metrics.http_latency.observe(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
@@ -77,10 +85,7 @@ net::Response HttpApi::route(net::Request& request, const net::Peer& peer, const
     requireMethod(request, http::verb::get);
     return health(request);
   }
-  if (s.empty()) {
-    requireMethod(request, http::verb::get);
-    return index(request);
-  }
+  if (std::optional<net::Response> file = static_files_.serve(request, s)) return std::move(*file);
   const AuthResult auth = auth_.authenticate(request, peer);
   if (!auth.principal) throw ApiError(auth.status, auth.code, auth.message);
   if (s.size() == 1 && s[0] == "metrics") {
@@ -129,18 +134,6 @@ net::Response HttpApi::health(const net::Request& request) {
 net::Response HttpApi::metrics(const net::Request& request) {
   return bodyResponse(request, renderPrometheus(service_.metrics(), service_.gauges()),
                       "text/plain; version=0.0.4; charset=utf-8");
-}
-
-net::Response HttpApi::index(const net::Request& request) {
-  std::string html =
-      "<!doctype html><html><head><meta charset=\"utf-8\"><title>rmapd</title></head><body>"
-      "<h1>rmapd ";
-  html += MappingService::version();
-  html +=
-      "</h1><p>The 3D viewer is not part of this build yet. The HTTP API: "
-      "<a href=\"/v1/maps\">/v1/maps</a>, <a href=\"/v1/robots\">/v1/robots</a>, "
-      "<a href=\"/healthz\">/healthz</a>, <a href=\"/metrics\">/metrics</a> (docs/API.md).</p></body></html>";
-  return bodyResponse(request, std::move(html), "text/html; charset=utf-8");
 }
 
 net::Response HttpApi::listMaps(const net::Request& request) {

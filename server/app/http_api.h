@@ -1,13 +1,14 @@
 #pragma once
 /// @file http_api.h
-/// The HTTP API (docs/API.md): routes a request to its handler after
-/// authentication, turns ApiError into the JSON error shape and counts
-/// requests. Handlers are thin: the work is done by MappingService, the maps
-/// and the store.
+/// The HTTP API (docs/API.md): routes a request to the viewer's static files
+/// or, after authentication, to its handler, turns ApiError into the JSON
+/// error shape and counts requests. Handlers are thin: the work is done by
+/// MappingService, the maps and the store.
 
 #include "app/auth.h"
 #include "app/http_util.h"
 #include "app/mapping_service.h"
+#include "app/static_files.h"
 #include "net/service.h"
 
 namespace rmap::app {
@@ -22,7 +23,6 @@ class HttpApi {
   net::Response route(net::Request& request, const net::Peer& peer, const Target& target);
   net::Response health(const net::Request& request);
   net::Response metrics(const net::Request& request);
-  net::Response index(const net::Request& request);
   net::Response listMaps(const net::Request& request);
   net::Response describeMap(const net::Request& request, const MapWorker& map);
   net::Response listRobots(const net::Request& request);
@@ -38,6 +38,7 @@ class HttpApi {
 
   MappingService& service_;
   const Authenticator& auth_;
+  StaticFiles static_files_;  ///< from service.config().web_root
 };
 
 /// JSON of a map's description (GET /v1/maps/{map}).

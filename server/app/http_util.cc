@@ -141,4 +141,31 @@ bool acceptsJson(const net::Request& request) {
              std::string_view::npos;
 }
 
+bool etagMatches(const net::Request& request, std::string_view etag) {
+  const auto [first, last] = request.equal_range(http::field::if_none_match);
+  for (auto field = first; field != last; ++field) {
+    std::string_view list(field->value().data(), field->value().size());
+    while (!list.empty()) {
+      const size_t comma = list.find(',');
+      std::string_view tag = list.substr(0, comma);
+      while (!tag.empty() && (tag.front() == ' ' || tag.front() == '\t')) tag.remove_prefix(1);
+      while (!tag.empty() && (tag.back() == ' ' || tag.back() == '\t')) tag.remove_suffix(1);
+      if (tag.starts_with("W/")) tag.remove_prefix(2);
+      if (tag == "*" || tag == etag) return true;
+      if (comma == std::string_view::npos) break;
+      list.remove_prefix(comma + 1);
+    }
+  }
+  return false;
+}
+
+net::Response notModified(const net::Request& request, const std::string& etag) {
+  net::Response response{http::status::not_modified, request.version()};
+  response.set(http::field::etag, etag);
+  response.set(http::field::cache_control, "no-cache");
+  response.keep_alive(request.keep_alive());
+  response.prepare_payload();
+  return response;
+}
+
 }  // namespace rmap::app

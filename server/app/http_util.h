@@ -64,4 +64,11 @@ net::Response bodyResponse(const net::Request& request, std::string body, const 
 /// Whether the client asked for JSON (Accept: application/json).
 bool acceptsJson(const net::Request& request);
 
+/// Whether the request's If-None-Match names `etag` (a strong tag): "*", or a
+/// comma-separated list compared weakly (a W/ prefix is ignored), RFC 9110 §13.1.2.
+bool etagMatches(const net::Request& request, std::string_view etag);
+/// 304 Not Modified: no body, the ETag, Cache-Control: no-cache (every
+/// validated response of rmapd is no-cache).
+net::Response notModified(const net::Request& request, const std::string& etag);
+
 }  // namespace rmap::app

@@ -204,14 +204,7 @@ net::Response HttpApi::tile(const net::Request& request, const Target& target, M
   // Versions restart with every start of the server; the epoch keeps ETags of different starts apart.
   const std::string etag =
       "\"" + std::to_string(service_.epoch()) + "-" + std::to_string(version) + (json ? "j" : "p") + "\"";
-  const auto if_none_match = request.find(http::field::if_none_match);
-  if (if_none_match != request.end() && std::string_view(if_none_match->value().data(), if_none_match->value().size()) == etag) {
-    net::Response response{http::status::not_modified, request.version()};
-    response.set(http::field::etag, etag);
-    response.keep_alive(request.keep_alive());
-    response.prepare_payload();
-    return response;
-  }
+  if (etagMatches(request, etag)) return notModified(request, etag);
   const map3d::CuboidMap& map = worker.map();
   const std::vector<map3d::CuboidBox> cuboids = tileCuboids(map, key);
   net::Response response;

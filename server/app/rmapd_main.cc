@@ -10,6 +10,7 @@
 #include "app/config.h"
 #include "app/mapping_service.h"
 #include "app/rmapd_service.h"
+#include "app/static_files.h"
 #include "net/server.h"
 
 namespace {
@@ -31,11 +32,13 @@ int main(int argc, char** argv) {
   CLI::App cli{"rmapd — networked 3D mapping server"};
   std::string listen;
   std::string data_dir;
+  std::string web_root;
   std::string config_file;
   std::string log_level;
   int io_threads = 0;
   cli.add_option("--listen", listen, "HOST:PORT to serve HTTP and WebSocket on (default 127.0.0.1:8080)");
   cli.add_option("--data-dir", data_dir, "directory of the store (default ./rmap-data)");
+  cli.add_option("--web-root", web_root, "directory of the web viewer served at / (default: the build's web/)");
   cli.add_option("--config", config_file, "YAML configuration file")->check(CLI::ExistingFile);
   cli.add_option("--log-level", log_level, "trace, debug, info, warn, error")
       ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error"}));
@@ -47,6 +50,7 @@ int main(int argc, char** argv) {
     if (!config_file.empty()) rmap::app::loadConfigFile(config_file, config);
     if (!listen.empty()) rmap::app::setListenAddress(listen, config);
     if (!data_dir.empty()) config.data_dir = data_dir;
+    if (!web_root.empty()) config.web_root = web_root;
     if (!log_level.empty()) config.log_level = log_level;
     if (io_threads > 0) config.io_threads = io_threads;
     rmap::app::validate(config);
@@ -67,6 +71,14 @@ int main(int argc, char** argv) {
   std::signal(SIGPIPE, SIG_IGN);
 
   try {
+    // The API works without the viewer: say so once here, and GET / answers 503 with the fix.
+    if (const auto missing = rmap::app::missingViewerFile(config.web_root)) {
+      spdlog::warn("web viewer not installed: {} is missing; GET / answers 503 until `npm ci --prefix web` "
+                   "installs it (or web_root / --web-root names an installed copy)",
+                   std::filesystem::absolute(*missing).string());
+    } else {
+      spdlog::info("serving the web viewer from {}", std::filesystem::absolute(config.web_root).string());
+    }
     rmap::app::MappingService service(config);
     rmap::app::RmapdService handlers(service);
     rmap::net::ServerOptions options;

@@ -31,7 +31,7 @@ TempDir::~TempDir() {
 }
 
 RmapdProcess::RmapdProcess(const fs::path& data_dir, const std::string& config_yaml,
-                           std::chrono::seconds startup_timeout) {
+                           std::chrono::seconds startup_timeout, const std::vector<std::string>& extra_args) {
   const fs::path base = data_dir.parent_path();
   log_path_ = base / (data_dir.filename().string() + "-rmapd.log");
   std::vector<std::string> args{RMAPD_PATH, "--listen", "127.0.0.1:0", "--data-dir", data_dir.string()};
@@ -41,6 +41,7 @@ RmapdProcess::RmapdProcess(const fs::path& data_dir, const std::string& config_y
     args.push_back("--config");
     args.push_back(config.string());
   }
+  args.insert(args.end(), extra_args.begin(), extra_args.end());
   int out[2];
   if (pipe(out) != 0) throw std::runtime_error("pipe failed");
   pid_ = fork();

@@ -29,10 +29,11 @@ class RmapdProcess {
  public:
   /// Starts rmapd with `--listen 127.0.0.1:0 --data-dir data_dir` plus the
   /// config file (written from `config_yaml` beside the data dir when not
-  /// empty) and waits until it listens.
+  /// empty) and `extra_args`, and waits until it listens.
   /// @throws std::runtime_error with rmapd's log when it does not come up in time
   RmapdProcess(const std::filesystem::path& data_dir, const std::string& config_yaml = {},
-               std::chrono::seconds startup_timeout = std::chrono::seconds(60));
+               std::chrono::seconds startup_timeout = std::chrono::seconds(60),
+               const std::vector<std::string>& extra_args = {});
   /// Terminates it (SIGTERM, then SIGKILL after a grace period).
   ~RmapdProcess();
   RmapdProcess(const RmapdProcess&) = delete;

@@ -47,6 +47,7 @@ TEST(LoadConfigFile, SetsEveryGivenKey) {
   const YamlFile file(R"(
 listen: "0.0.0.0:9000"
 data_dir: /var/lib/rmap
+web_root: /usr/share/rmap/web
 io_threads: 4
 viewer_tick_ms: 50
 auth:
@@ -71,6 +72,7 @@ maps:
   EXPECT_EQ(config.listen_host, "0.0.0.0");
   EXPECT_EQ(config.listen_port, 9000);
   EXPECT_EQ(config.data_dir, "/var/lib/rmap");
+  EXPECT_EQ(config.web_root, "/usr/share/rmap/web");
   EXPECT_EQ(config.io_threads, 4);
   EXPECT_EQ(config.viewer_tick_ms, 50);
   ASSERT_EQ(config.auth.tokens.size(), 3u);
@@ -103,6 +105,7 @@ TEST(LoadConfigFile, AbsentKeysKeepTheirValues) {
   EXPECT_EQ(config.listen_port, 1234);
   EXPECT_EQ(config.listen_host, defaults.listen_host);
   EXPECT_EQ(config.data_dir, defaults.data_dir);
+  EXPECT_EQ(config.web_root, defaults.web_root);
   ASSERT_EQ(config.auth.tokens.size(), 1u);
   EXPECT_EQ(config.auth.tokens[0].token, "kept-token");
   EXPECT_EQ(config.limits.max_frame_bytes, defaults.limits.max_frame_bytes);
@@ -184,6 +187,18 @@ TEST(SetListenAddress, RejectsUnbalancedOrEmptyBrackets) {
 }
 
 TEST(Validate, AcceptsTheDefaults) { EXPECT_NO_THROW(validate(Config{})); }
+
+TEST(Validate, RejectsAnEmptyWebRoot) {
+  Config config;
+  config.web_root.clear();
+  EXPECT_THROW(validate(config), std::invalid_argument);
+}
+
+TEST(DefaultWebRoot, IsTheBuildsWebDirectory) {
+  // CMake sets RMAP_WEB_ROOT to the source tree's web/ unless told otherwise.
+  EXPECT_TRUE(defaultWebRoot().is_absolute()) << defaultWebRoot();
+  EXPECT_EQ(Config{}.web_root, defaultWebRoot());
+}
 
 TEST(Validate, RejectsARobotTokenWithoutRobotId) {
   Config config;

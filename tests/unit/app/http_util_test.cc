@@ -150,5 +150,32 @@ TEST(AcceptsJson, LooksForApplicationJson) {
   EXPECT_TRUE(acceptsJson(request));
 }
 
+TEST(EtagMatches, ReadsIfNoneMatchAsAListComparedWeakly) {
+  const std::string etag = "\"7-812j\"";
+  net::Request request{http::verb::get, "/", 11};
+  EXPECT_FALSE(etagMatches(request, etag));
+  for (const std::string value : {"\"7-812j\"", "W/\"7-812j\"", "\"1-1p\", \"7-812j\"", "\"a\",W/\"7-812j\" ", "*"}) {
+    request.set(http::field::if_none_match, value);
+    EXPECT_TRUE(etagMatches(request, etag)) << value;
+  }
+  for (const std::string value : {"\"7-812p\"", "7-812j", "\"7-812j", "", "\"7-812\", j\""}) {
+    request.set(http::field::if_none_match, value);
+    EXPECT_FALSE(etagMatches(request, etag)) << value;
+  }
+  // Repeated fields form one list (RFC 9110 §5.3).
+  request.set(http::field::if_none_match, "\"other\"");
+  request.insert(http::field::if_none_match, etag);
+  EXPECT_TRUE(etagMatches(request, etag));
+}
+
+TEST(NotModified, HasTheETagAndNoBody) {
+  net::Request request{http::verb::get, "/", 11};
+  const net::Response response = notModified(request, "\"x\"");
+  EXPECT_EQ(response.result_int(), 304u);
+  EXPECT_EQ(response[http::field::etag], "\"x\"");
+  EXPECT_EQ(response[http::field::cache_control], "no-cache");
+  EXPECT_TRUE(response.body().empty());
+}
+
 }  // namespace
 }  // namespace rmap::app
