@@ -9,6 +9,7 @@
 #include <cmath>
 #include <limits>
 #include <type_traits>
+#include <utility>
 
 #include "map3d/cell_key.h"
 
@@ -20,7 +21,18 @@ class RayWalker {
   /// @param origin_m, end_m  metres; both must lie in addressable cells
   /// @return false when either point is not addressable (NaN/inf/out of range)
   bool init(const Grid& grid, const Eigen::Vector3f& origin_m, const Eigen::Vector3f& end_m) {
-    if (!grid.cellChecked(origin_m, current_) || !grid.cellChecked(end_m, end_)) return false;
+    CellKey origin_cell, end_cell;
+    if (!grid.cellChecked(origin_m, origin_cell) || !grid.cellChecked(end_m, end_cell)) return false;
+    init(grid, origin_m, origin_cell, end_m, end_cell);
+    return true;
+  }
+
+  /// The same with the cells of both points already known (`grid.cellChecked`
+  /// succeeded for them), so a caller that has them pays no second look-up.
+  void init(const Grid& grid, const Eigen::Vector3f& origin_m, const CellKey& origin_cell,
+            const Eigen::Vector3f& end_m, const CellKey& end_cell) {
+    current_ = origin_cell;
+    end_ = end_cell;
     Eigen::Vector3f direction = end_m - origin_m;
     // float sum of float squares, as OctoMap's Vector3::norm_sq
     const float norm_sq = direction.x() * direction.x() + direction.y() * direction.y() + direction.z() * direction.z();
@@ -45,7 +57,6 @@ class RayWalker {
         t_delta_[a] = std::numeric_limits<double>::max();
       }
     }
-    return true;
   }
 
   const CellKey& cell() const { return current_; }
@@ -67,6 +78,40 @@ class RayWalker {
     t_max_[dim] += t_delta_[dim];
   }
 
+  /// Steps on until the end cell or the end of the segment, calling
+  /// `call(const CellKey&) -> bool` for each cell entered (false stops). The
+  /// same steps as step(), with the state held in locals (registers) rather
+  /// than in the walker's arrays; the walker itself is left where it was.
+  template <class Call>
+  void walkRest(Call&& call) const {
+    const double length = length_m_;
+    int32_t cx = current_.x, cy = current_.y, cz = current_.z;
+    const int32_t ex = end_.x, ey = end_.y, ez = end_.z;
+    const int32_t sx = step_[0], sy = step_[1], sz = step_[2];
+    double tx = t_max_[0], ty = t_max_[1], tz = t_max_[2];
+    const double dx = t_delta_[0], dy = t_delta_[1], dz = t_delta_[2];
+    while (true) {
+      if (tx < ty) {
+        if (tx < tz) {
+          cx += sx;
+          tx += dx;
+        } else {
+          cz += sz;
+          tz += dz;
+        }
+      } else if (ty < tz) {
+        cy += sy;
+        ty += dy;
+      } else {
+        cz += sz;
+        tz += dz;
+      }
+      if (cx == ex && cy == ey && cz == ez) break;
+      if (std::min(std::min(tx, ty), tz) > length) break;
+      if (!call(CellKey{cx, cy, cz})) break;
+    }
+  }
+
  private:
   CellKey current_, end_;
   int step_[3] = {0, 0, 0};
@@ -80,12 +125,14 @@ class RayWalker {
 /// order as OctoMap's computeRayKeys (which also stops early when rounding
 /// would step past the end cell). A visitor returning bool stops the walk by
 /// returning false.
-/// @return false when origin or end is not addressable; nothing is visited then
+/// @param origin_cell, end_cell  the cells of origin_m and end_m, as
+///   `grid.cellChecked` gives them (so both are addressable)
 template <class Visit>
-bool traverseFreeCells(const Grid& grid, const Eigen::Vector3f& origin_m, const Eigen::Vector3f& end_m, Visit&& visit) {
+void traverseFreeCells(const Grid& grid, const Eigen::Vector3f& origin_m, const CellKey& origin_cell,
+                       const Eigen::Vector3f& end_m, const CellKey& end_cell, Visit&& visit) {
+  if (origin_cell == end_cell) return;
   RayWalker walker;
-  if (!walker.init(grid, origin_m, end_m)) return false;
-  if (walker.atEnd()) return true;
+  walker.init(grid, origin_m, origin_cell, end_m, end_cell);
   auto call = [&](const CellKey& c) {
     if constexpr (std::is_same_v<decltype(visit(c)), bool>) {
       return visit(c);
@@ -94,14 +141,17 @@ bool traverseFreeCells(const Grid& grid, const Eigen::Vector3f& origin_m, const 
       return true;
     }
   };
-  if (!call(walker.cell())) return true;
-  const double length = walker.length();
-  while (true) {
-    walker.step();
-    if (walker.atEnd()) break;
-    if (walker.exitDistance() > length) break;
-    if (!call(walker.cell())) break;
-  }
+  if (!call(walker.cell())) return;
+  walker.walkRest(call);
+}
+
+/// The same for points whose cells are not known yet.
+/// @return false when origin or end is not addressable; nothing is visited then
+template <class Visit>
+bool traverseFreeCells(const Grid& grid, const Eigen::Vector3f& origin_m, const Eigen::Vector3f& end_m, Visit&& visit) {
+  CellKey origin_cell, end_cell;
+  if (!grid.cellChecked(origin_m, origin_cell) || !grid.cellChecked(end_m, end_cell)) return false;
+  traverseFreeCells(grid, origin_m, origin_cell, end_m, end_cell, std::forward<Visit>(visit));
   return true;
 }
 

@@ -40,20 +40,20 @@ void ScanUpdate::gather(const Grid& grid, const OccupancyParams& params, const E
   }
   bool origin_freed = false;
   const int stop_run = std::max(kShortestRun, params.stop_after_freed_cells);
-  auto free = [&](const Eigen::Vector3f& end_m) {
+  auto free = [&](const Eigen::Vector3f& end_m, const CellKey& end_cell) {
     if (exact) {
-      traverseFreeCells(grid, sensor_origin_m, end_m, [this](const CellKey& c) { markFree(c); });
+      traverseFreeCells(grid, sensor_origin_m, origin_cell, end_m, end_cell, [this](const CellKey& c) { markFree(c); });
       return;
     }
     // Walk back from the end; the walk's first cell is the end cell itself, and
     // it never reaches the sensor's cell, which is freed once below.
-    bool end_cell = true;
+    bool first = true;
     bool left_origin = false;
     int freed_run = 0;
-    traverseFreeCells(grid, end_m, sensor_origin_m, [&](const CellKey& c) {
+    traverseFreeCells(grid, end_m, end_cell, sensor_origin_m, origin_cell, [&](const CellKey& c) {
       left_origin = true;
-      if (end_cell) {
-        end_cell = false;
+      if (first) {
+        first = false;
         return true;
       }
       BlockMarks& marks = marksOf(blockOf(c));
@@ -89,12 +89,13 @@ void ScanUpdate::gather(const Grid& grid, const OccupancyParams& params, const E
         if (beam) {
           const Eigen::Vector3f dir = d / static_cast<float>(range);
           const Eigen::Vector3f truncated = sensor_origin_m + dir * static_cast<float>(params.max_range_m);
-          free(truncated);
+          CellKey truncated_cell;
+          if (grid.cellChecked(truncated, truncated_cell)) free(truncated, truncated_cell);
         }
         continue;
       }
     }
-    if (beam) free(p);
+    if (beam) free(p, end);
     markOccupied(end);
   }
 }
