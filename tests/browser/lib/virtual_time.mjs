@@ -1,0 +1,35 @@
+// The outside check's screenshot, reproduced over CDP: chromium --headless --virtual-time-budget=B
+// --screenshot loads the page in real time up to its load event, then grants B ms of virtual
+// time (policy pauseIfNetworkFetchesPending, maxVirtualTimeTaskStarvationCount 9999), waits for
+// Emulation.virtualTimeBudgetExpired and calls Page.captureScreenshot
+// (components/headless/command_handler/headless_command.js in Chromium).
+
+/**
+ * @returns {Promise<{png: Buffer|null, loadMs: number, budgetRealMs: number|null, screenshotMs: number|null, error?: string}>}
+ */
+export async function virtualTimeScreenshot(page, url, { budgetMs = 15000, timeoutMs = 120000 } = {}) {
+  const cdp = await page.context().newCDPSession(page);
+  const t0 = Date.now();
+  const result = { png: null, loadMs: 0, budgetRealMs: null, screenshotMs: null };
+  const deadline = (what) => new Promise((_, reject) => {
+    setTimeout(() => reject(new Error(`${what} did not finish within ${timeoutMs} ms of real time`)), Math.max(1, timeoutMs - (Date.now() - t0)));
+  });
+  try {
+    await page.goto(url, { waitUntil: 'load' });
+    result.loadMs = Date.now() - t0;
+    const expired = new Promise((resolve) => cdp.once('Emulation.virtualTimeBudgetExpired', resolve));
+    await cdp.send('Emulation.setVirtualTimePolicy',
+      { budget: budgetMs, maxVirtualTimeTaskStarvationCount: 9999, policy: 'pauseIfNetworkFetchesPending' });
+    const t1 = Date.now();
+    await Promise.race([expired, deadline('the virtual time budget')]);
+    result.budgetRealMs = Date.now() - t1;
+    const t2 = Date.now();
+    const shot = await Promise.race([cdp.send('Page.captureScreenshot', { format: 'png' }), deadline('Page.captureScreenshot')]);
+    result.screenshotMs = Date.now() - t2;
+    result.png = Buffer.from(shot.data, 'base64');
+  } catch (e) {
+    result.error = e.message;
+  }
+  await cdp.detach().catch(() => {});
+  return result;
+}
