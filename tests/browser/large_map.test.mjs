@@ -85,6 +85,8 @@ describe('web viewer, large map', { timeout: 175000 }, () => {
     const elapsed = Date.now() - t0;
     const frames = stats.frameCount - f0;
     await page.uncheck('#auto-rotate');
+    // Intervals between completed frames while turning (a progressive frame spans several
+    // animation frames).
     const frameMs = summary(stats.frames.slice(0, frames));
     const rafMs = summary(stats.deltas.slice(0, Math.max(1, Math.round(elapsed / 20))));
 
@@ -102,9 +104,15 @@ describe('web viewer, large map', { timeout: 175000 }, () => {
         tile_requests: load.stats.loads,
         requests: record.requests,
       },
+      // ms after navigation start: modules running, WebGL up, map list, tile index, first tile,
+      // every wanted tile loaded, first frame with cuboids on the canvas, first frame after that.
       times_ms: {
+        modules: Math.round(t.start),
+        renderer: Math.round(t.rendererMs),
+        maps: Math.round(t.mapsMs),
         index: Math.round(t.indexMs),
         first_tile: Math.round(t.firstTileMs),
+        all_tiles: Math.round(t.idleMs),
         first_picture: Math.round(t.firstPictureMs),
         refined: Math.round(t.refinedMs),
       },

@@ -51,8 +51,10 @@ describe('web viewer', { timeout: 170000 }, () => {
   after(async () => {
     if (page) await page.context().close().catch(() => {});
     if (browser) await browser.close().catch(() => {});
+    log('browser closed');
     if (sim) await sim.stop();
     if (server) await server.stop();
+    log('rmapd stopped');
   });
 
   test('headless screenshot after 15 s of virtual time shows the map', async () => {
@@ -140,9 +142,9 @@ describe('web viewer', { timeout: 170000 }, () => {
 
   test('a click answers what the HTTP API answers for that point', async () => {
     // A still map, so the page's answer and ours are read from the same map.
-    const done = await sim.promise;
-    log(`rmap-sim finished: ${done.stdout.trim()}`);
-    await sleep(1000);
+    await sim.stop();
+    log('rmap-sim stopped');
+    await sleep(1500);
     await waitFor('tiles loaded', () => hook((v) => v.tileStats().pending === 0), { timeout: 20000 });
     const rect = await canvasRect(page);
     let pick = null;

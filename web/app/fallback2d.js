@@ -202,7 +202,7 @@ export class Renderer2D {
         (box[1][1] - box[0][1]) * this.scale);
     }
     this.frames++;
-    if (this.onRendered) this.onRendered(this.cuboidCount());
+    if (this.onRendered) this.onRendered(this.cuboidCount(), performance.now());
   }
 
   css(rgb) {

@@ -25,6 +25,8 @@ const BOX_COUNT_LIMIT = 100000;
 
 let overlayTimer = null;
 
+const bootMs = performance.now(); // modules loaded and running
+
 const state = {
   maps: [],
   map: null,
@@ -37,7 +39,8 @@ const state = {
   loopIds: new Set(),
   lastQuery: null,
   lastBox: null,
-  timings: { start: performance.now(), firstPictureMs: null, refinedMs: null, indexMs: null, firstTileMs: null },
+  timings: { start: bootMs, rendererMs: null, mapsMs: null, indexMs: null, firstTileMs: null, idleMs: null,
+    firstPictureMs: null, refinedMs: null },
   errors: [],
   layersAvailable: null,
   pendingAuth: false,
@@ -60,6 +63,7 @@ if (!renderer) {
   showOverlay('WebGL is not available: showing the map from above (2D).', 6000);
 }
 
+state.timings.rendererMs = performance.now();
 if (renderer.software) {
   console.info(`rmap viewer: software WebGL (${renderer.gpuName}); drawing at most ${SOFTWARE_BUDGET} cuboids`);
 }
@@ -73,7 +77,7 @@ const tiles = new TileManager(api, renderer, {
     if (state.timings.firstTileMs === null) state.timings.firstTileMs = performance.now();
   },
   onIdle: () => {
-    if (state.timings.refinedMs === null && renderer.cuboidCount() > 0) state.timings.refinedMs = performance.now();
+    if (state.timings.idleMs === null && renderer.cuboidCount() > 0) state.timings.idleMs = performance.now();
   },
   onEpochChange: () => resetRobotsTrajectories(),
   onError: (e) => noteError(e),
@@ -83,9 +87,13 @@ const tiles = new TileManager(api, renderer, {
 tiles.maxDrawn = Number(params.get('budget')) || (renderer.software ? SOFTWARE_BUDGET
   : renderer.kind === 'canvas2d' ? 200000 : 3000000);
 renderer.onViewChange = () => tiles.scheduleSelect(60);
-renderer.onRendered = (count) => {
+// Called when a complete frame is on the canvas; startedAt: when that frame began (a progressive
+// frame spans several animation frames).
+renderer.onRendered = (count, startedAt) => {
   const t = state.timings;
-  if (count > 0 && t.firstPictureMs === null) t.firstPictureMs = performance.now();
+  const now = performance.now();
+  if (count > 0 && t.firstPictureMs === null) t.firstPictureMs = now;
+  if (count > 0 && t.refinedMs === null && t.idleMs !== null && startedAt >= t.idleMs) t.refinedMs = now;
 };
 
 // ----- token prompt -----
@@ -175,6 +183,7 @@ async function refreshMaps() {
     return;
   }
   state.maps = json.maps || [];
+  if (state.timings.mapsMs === null) state.timings.mapsMs = performance.now();
   const select = $('map-select');
   const names = state.maps.map((m) => m.name);
   const current = [...select.options].map((o) => o.value);
@@ -198,7 +207,7 @@ function onMapInfo(info) {
   state.mapInfo = info;
   if (info && info.bounds) {
     const { min, max } = info.bounds;
-    renderer.setZRange(min[2], Math.max(max[2], min[2] + 1));
+    if ($('z-cut').value === $('z-cut').max) renderer.setZRange(min[2], Math.max(max[2], min[2] + 1));
     $('legend').replaceChildren(...legendFor(renderer.colorMode));
     // Follow the map while it grows (until the user moves the camera), but not every small change.
     const last = state.fittedBounds;
@@ -517,11 +526,14 @@ function applyZCut() {
   if (!b || t >= 1) {
     renderer.setZCut(Infinity);
     $('z-cut-value').textContent = 'off';
-    return;
+    if (b) renderer.setZRange(b.min[2], Math.max(b.max[2], b.min[2] + 1));
+  } else {
+    const z = b.min[2] + t * (b.max[2] - b.min[2]);
+    renderer.setZCut(z);
+    $('z-cut-value').textContent = `${z.toFixed(1)} m`;
+    renderer.setZRange(b.min[2], Math.max(z, b.min[2] + 0.5)); // the colours span what is shown
   }
-  const z = b.min[2] + t * (b.max[2] - b.min[2]);
-  renderer.setZCut(z);
-  $('z-cut-value').textContent = `${z.toFixed(1)} m`;
+  $('legend').replaceChildren(...legendFor(renderer.colorMode));
 }
 $('z-cut').addEventListener('input', applyZCut);
 $('fit-view').addEventListener('click', () => {
@@ -818,7 +830,6 @@ window.rmapViewer = Object.freeze({
   },
 });
 
-if (params.has('stoprender')) { const r = renderer.renderNow.bind(renderer); const lim = Number(params.get('stoprender')); renderer.renderNow = () => { if (performance.now() < lim) r(); else renderer.dirty = false; }; }
 // Diagnostics: ?debug=1 logs the tile and render counters once a second.
 if (params.has('debug')) {
   setInterval(() => {

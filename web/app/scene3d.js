@@ -142,7 +142,7 @@ export class Renderer3D {
     this.pass = null;
     this.frameTimes = new Float32Array(FRAME_SAMPLES); // whole frames (all passes' steps), ms
     this.frameCount = 0;
-    this.finishEachFrame = new URLSearchParams(window.location.search).get('glfinish') === '1';
+    this.lastFrameDone = 0;
     this.dirty = true;
     this.viewDirty = true;
     this.lastRender = 0;
@@ -247,9 +247,7 @@ export class Renderer3D {
     this.renderer.render(this.scene, this.camera);
     this.lastRender = t0;
     this.renderTimes[this.frameCursor % FRAME_SAMPLES] = performance.now() - t0;
-    this.frames++;
-    this.recordFrame(performance.now() - t0);
-    if (this.onRendered) this.onRendered(this.cuboidCount());
+    this.frameDone(t0);
   }
 
   // Progressive frames are drawn into an offscreen target and shown when complete, so the canvas
@@ -301,15 +299,21 @@ export class Renderer3D {
     if (pass.step >= steps) {
       this.pass = null;
       this.lastRender = t0;
-      this.frames++;
-      this.recordFrame(performance.now() - pass.started);
+      this.frameDone(pass.started);
     }
-    if (this.onRendered) this.onRendered(this.cuboidCount());
   }
 
-  recordFrame(ms) {
-    this.frameTimes[this.frameCount % FRAME_SAMPLES] = ms;
-    this.frameCount++;
+  // A complete frame is on the canvas. Frame time = time since the previous one completed
+  // (meaningful while rendering continuously, e.g. rotating).
+  frameDone(startedAt) {
+    const now = performance.now();
+    this.frames++;
+    if (this.lastFrameDone > 0) {
+      this.frameTimes[this.frameCount % FRAME_SAMPLES] = now - this.lastFrameDone;
+      this.frameCount++;
+    }
+    this.lastFrameDone = now;
+    if (this.onRendered) this.onRendered(this.cuboidCount(), startedAt);
   }
 
   /**

@@ -87,7 +87,9 @@ export async function startRmapd({ dataDir, config, extraArgs = [] } = {}) {
       if (server.proxy) await server.proxy.close();
       if (child.exitCode === null && child.signalCode === null) {
         child.kill('SIGTERM');
-        await Promise.race([new Promise((r) => child.once('exit', r)), sleep(8000)]);
+        let timer;
+        await Promise.race([new Promise((r) => child.once('exit', r)), new Promise((r) => { timer = setTimeout(r, 8000); })]);
+        clearTimeout(timer);
         if (child.exitCode === null && child.signalCode === null) child.kill('SIGKILL');
       }
       fs.rmSync(dataDir, { recursive: true, force: true });

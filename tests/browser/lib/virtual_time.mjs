@@ -11,8 +11,10 @@ export async function virtualTimeScreenshot(page, url, { budgetMs = 15000, timeo
   const cdp = await page.context().newCDPSession(page);
   const t0 = Date.now();
   const result = { png: null, loadMs: 0, budgetRealMs: null, screenshotMs: null };
+  const timers = [];
   const deadline = (what) => new Promise((_, reject) => {
-    setTimeout(() => reject(new Error(`${what} did not finish within ${timeoutMs} ms of real time`)), Math.max(1, timeoutMs - (Date.now() - t0)));
+    timers.push(setTimeout(() => reject(new Error(`${what} did not finish within ${timeoutMs} ms of real time`)),
+      Math.max(1, timeoutMs - (Date.now() - t0))));
   });
   try {
     await page.goto(url, { waitUntil: 'load' });
@@ -30,6 +32,7 @@ export async function virtualTimeScreenshot(page, url, { budgetMs = 15000, timeo
   } catch (e) {
     result.error = e.message;
   }
+  for (const t of timers) clearTimeout(t);
   await cdp.detach().catch(() => {});
   return result;
 }
