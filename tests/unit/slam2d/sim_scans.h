@@ -68,4 +68,21 @@ inline std::vector<Pose2> simTour(const sim::VoxelWorld& world, int poses, doubl
   return tour;
 }
 
+/// The tour with in-place turns inserted so the heading changes by at most
+/// max_turn_rad between poses, as a robot turns while its laser keeps scanning
+/// (the planned tour turns its heading at once at path corners).
+inline std::vector<Pose2> smoothTurns(const std::vector<Pose2>& tour, double max_turn_rad) {
+  std::vector<Pose2> out;
+  for (const Pose2& p : tour) {
+    if (!out.empty()) {
+      const Pose2 last = out.back();
+      const double turn = normalizeAngle(p.theta_rad - last.theta_rad);
+      const int steps = static_cast<int>(std::ceil(std::abs(turn) / max_turn_rad));
+      for (int i = 1; i < steps; ++i) out.push_back({last.x_m, last.y_m, normalizeAngle(last.theta_rad + turn * i / steps)});
+    }
+    out.push_back(p);
+  }
+  return out;
+}
+
 }  // namespace rmap::slam2d::testing
