@@ -10,10 +10,14 @@
 #include <unordered_map>
 #include <vector>
 
+#include "slam2d/calibration_sampler.h"
 #include "slam2d/grid_map.h"
+#include "slam2d/incidence.h"
+#include "slam2d/intensity_calibration.h"
 #include "slam2d/laser_scan.h"
 #include "slam2d/pose2.h"
 #include "slam2d/scan_matcher.h"
+#include "slam2d/self_calibration.h"
 
 namespace rmap::slam2d {
 
@@ -39,12 +43,23 @@ struct Slam2dOptions {
   /// leaves free (corridor axis) at the prediction.
   double odometry_information_xy = 0.0;
   double odometry_information_theta = 0.0;
-  double reflectivity_weight = 0.0;      ///< weight of the reflectivity residual (0 = off)
+  /// Weight of the reflectivity residual in the matcher, per point relative
+  /// to the occupancy residual (0 = off). Reflectivity ρ is dimensionless
+  /// (≈ 0–1), the occupancy residual too, so 1 weighs them alike.
+  double reflectivity_weight = 0.0;
   /// Matching uses endpoints at least this far apart (m), so dense scans cost
   /// no more than sparse ones; the map update uses every beam.
   double match_point_spacing_m = 0.05;
   OccupancyUpdate occupancy;             ///< log-odds of hits and misses, clamping
   ScanMatcherOptions matcher;            ///< iterations, damping, step bounds (reflectivity weight set from above)
+  IncidenceOptions incidence;            ///< per-beam incidence for the calibration
+  /// Self-calibration of a scanner model that has no calibration set: a
+  /// sample of readings of map cells (see CalibrationSampler) is collected at
+  /// map updates, and selfCalibrate runs once it is ready; reflectivity of
+  /// that model is fused from then on (the sample itself included).
+  bool self_calibration = true;
+  CalibrationSamplerOptions calibration_sample;
+  SelfCalibrationOptions self_calibration_fit;
 
   /// @throws std::invalid_argument naming the first bad option
   void validate() const;
@@ -54,6 +69,11 @@ class Slam2d {
  public:
   /// @throws std::invalid_argument for bad options
   explicit Slam2d(Slam2dOptions options = {});
+
+  /// Sets the calibration used for scans of `model` (replacing self-calibration for it).
+  void setCalibration(const std::string& model, IntensityCalibration calibration);
+  /// The calibration in use for `model` (set or self-calibrated), if any.
+  const IntensityCalibration* calibration(const std::string& model) const;
 
   /// Processes one scan of `trajectory` (created on first use, starting at
   /// `odometry` when given — robots that share a map must send odometry in
@@ -79,8 +99,18 @@ class Slam2d {
     Pose2 last_update_pose;         ///< pose at the last map update
   };
 
+  struct ScannerModel {
+    std::optional<IntensityCalibration> calibration;
+    std::optional<CalibrationSampler> sampler;  ///< while self-calibration is collecting
+    bool tried_full = false;                    ///< one attempt is made once the sample is full
+  };
+
+  /// Self-calibrates `model` from its sample when ready; fuses the sample on success.
+  void maybeSelfCalibrate(ScannerModel& model);
+
   Slam2dOptions options_;
   GridMap2d map_;
+  std::unordered_map<std::string, ScannerModel> models_;
   std::unordered_map<std::string, Trajectory> trajectories_;
   uint64_t version_ = 0;
 };
