@@ -11,9 +11,9 @@
 #include <nlohmann/json.hpp>
 #include <numbers>
 #include <stdexcept>
-#include <unordered_map>
 
 #include "common/machine.h"
+#include "slam2d/reflectivity_metrics.h"
 #include "slam2d/trajectory_metrics.h"
 
 namespace rmap::bench {
@@ -76,39 +76,6 @@ std::vector<StampedPose2> stamped(const std::vector<Slam2dInput>& inputs, const 
   std::vector<StampedPose2> out(poses.size());
   for (size_t i = 0; i < poses.size(); ++i) out[i] = {inputs[i].scan.stamp_ns, poses[i]};
   return out;
-}
-
-/// Median over cells seen ≥ 5 times of the coefficient of variation of the
-/// raw intensity of the returns landing in the cell (located with the true
-/// poses, at the map resolution): how much a surface's raw reading changes
-/// with the viewpoint.
-double rawIntensitySpread(const Slam2dDataset& data, double resolution_m) {
-  struct Acc {
-    double sum = 0.0, sum2 = 0.0;
-    int n = 0;
-  };
-  std::unordered_map<uint64_t, Acc> cells;
-  for (const SimReturn& r : data.sim_returns) {
-    const slam2d::LaserScan& scan = data.inputs[r.scan].scan;
-    const float range = scan.ranges_m[r.beam], angle = scan.angles_rad[r.beam];
-    const Eigen::Vector2d end = data.reference[r.scan] * Eigen::Vector2d(range * std::cos(angle), range * std::sin(angle));
-    const auto cx = static_cast<int32_t>(std::floor(end.x() / resolution_m));
-    const auto cy = static_cast<int32_t>(std::floor(end.y() / resolution_m));
-    Acc& a = cells[(uint64_t(uint32_t(cx)) << 32) | uint32_t(cy)];
-    const double i = scan.intensities[r.beam];
-    a.sum += i;
-    a.sum2 += i * i;
-    ++a.n;
-  }
-  std::vector<double> spreads;
-  for (const auto& [key, a] : cells) {
-    if (a.n < 5 || !(a.sum > 0.0)) continue;
-    const double mean = a.sum / a.n;
-    spreads.push_back(std::sqrt(std::max(0.0, a.sum2 / a.n - mean * mean)) / mean);
-  }
-  if (spreads.empty()) return std::numeric_limits<double>::quiet_NaN();
-  std::nth_element(spreads.begin(), spreads.begin() + spreads.size() / 2, spreads.end());
-  return spreads[spreads.size() / 2];
 }
 
 json slamOptionsJson(const slam2d::Slam2dOptions& o) {
@@ -223,10 +190,15 @@ int runSlam2dBench(const Slam2dBenchOptions& options) {
   }
   if (data.simulated) {
     r["ate_vs_truth_m"] = ate.rmse;
-    r["reflectivity_spread_raw"] = rawIntensitySpread(data, slam.grid().resolution_m());
-    // Calibrated reflectivity needs the intensity calibration (slam-calib); absent until it is built in.
-    r["reflectivity_rel_err_median"] = nullptr;
-    r["reflectivity_spread_calibrated"] = nullptr;
+    const ReflectivityFigures rf = reflectivityFigures(data, run.laser_poses, slam);
+    r["reflectivity_rel_err_median"] = rf.rel_err_median;
+    r["reflectivity_spread_raw"] = rf.spread_raw;
+    r["reflectivity_spread_calibrated"] = rf.spread_calibrated;
+    r["reflectivity"] = {{"rel_err_median_unscaled", rf.rel_err_median_unscaled},
+                         {"scale", rf.scale},
+                         {"cells_compared", rf.cells_compared},
+                         {"cells_spread", rf.cells_spread},
+                         {"spread_ratio", rf.spread_raw / rf.spread_calibrated}};
   }
 
   std::printf("scans %zu (rejected %zu, non-finite %zu, outside map %zu)\n", data.inputs.size(), run.rejected,
@@ -241,7 +213,11 @@ int runSlam2dBench(const Slam2dBenchOptions& options) {
   std::printf("SLAM %.3f s wall, %.3f s CPU; data %.1f s; %.0fx real time\n", run.wall_s, run.cpu_s,
               orNan(data.duration_s), realtime);
   if (data.simulated) {
-    std::printf("ATE vs truth %.4f m; raw intensity spread %.3f\n", ate.rmse, r["reflectivity_spread_raw"].get<double>());
+    std::printf("ATE vs truth %.4f m; reflectivity: median rel. error %.3f (scale %.3f, %zu cells), spread raw %.3f "
+                "vs calibrated %.3f\n",
+                ate.rmse, r["reflectivity_rel_err_median"].get<double>(), r["reflectivity"]["scale"].get<double>(),
+                r["reflectivity"]["cells_compared"].get<size_t>(), r["reflectivity_spread_raw"].get<double>(),
+                r["reflectivity_spread_calibrated"].get<double>());
   }
   if (!options.poses_out.empty()) writePoses(options.poses_out, data.inputs, run.laser_poses);
   if (!options.json_out.empty()) {
