@@ -44,6 +44,13 @@ for log in "$data"/carmen-2d/*.log*; do
   name=${name%%.log*}
   run "corrected-${name/-corrected/}" --log "$log"  # auto: ODOM increments, none without ODOM lines
 done
+# Raw logs scored against a corrected log of a subset of their scans (same stamps; data README).
+for pair in "mit-csail.clf.gz:csail-corrected-subset.robotlaser1.log.gz"; do
+  raw=$data/carmen-2d-raw/${pair%%:*}
+  reference=$data/carmen-2d/${pair##*:}
+  [ -f "$raw" ] && [ -f "$reference" ] || continue
+  run "raw-${pair%%.*}-vs-corrected-subset" --log "$raw" --odometry logged --reference "$reference"
+done
 for laser in sick hokuyo; do
   run "sim-building-$laser" --log sim:building --sim-laser "$laser"
 done

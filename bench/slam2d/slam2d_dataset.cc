@@ -6,6 +6,7 @@
 #include <numbers>
 #include <random>
 #include <stdexcept>
+#include <unordered_map>
 
 #include "datasets/carmen_log.h"
 #include "sim/building.h"
@@ -159,6 +160,22 @@ Slam2dDataset simulateBuilding(const Slam2dSimOptions& o) {
   return data;
 }
 
+/// Replaces the reference with the laser poses of `path` at equal stamps.
+void useReferenceLog(Slam2dDataset& data, const std::string& path) {
+  const datasets::CarmenLog log = datasets::readCarmenLog(path);
+  std::unordered_map<int64_t, Pose2> poses;
+  for (const datasets::CarmenScan& s : log.scans) poses.emplace(s.scan.stamp_ns, s.laser_pose);
+  size_t matched = 0;
+  for (size_t k = 0; k < data.inputs.size(); ++k) {
+    const auto it = poses.find(data.inputs[k].scan.stamp_ns);
+    data.reference[k] = it == poses.end() ? std::nullopt : std::optional<Pose2>(it->second);
+    matched += it != poses.end();
+  }
+  if (matched == 0) throw std::runtime_error(path + ": no scan stamp in common with the log, cannot be its reference");
+  data.reference_kind = "poses of " + std::filesystem::path(path).filename().string() + " at " +
+                        std::to_string(matched) + " shared stamps";
+}
+
 }  // namespace
 
 OdometrySource parseOdometrySource(const std::string& name) {
@@ -169,12 +186,11 @@ OdometrySource parseOdometrySource(const std::string& name) {
   throw std::invalid_argument("odometry source must be auto, logged, odom-increments or none, not \"" + name + "\"");
 }
 
-Slam2dDataset loadSlam2dDataset(const std::string& source, const std::string& relations_path, OdometrySource odometry,
-                                const Slam2dSimOptions& sim) {
+Slam2dDataset loadSlam2dDataset(const std::string& source, const Slam2dSourceOptions& options) {
   Slam2dDataset data;
   if (source == "sim:building") {
-    data = simulateBuilding(sim);
-    if (odometry == OdometrySource::kNone) {
+    data = simulateBuilding(options.sim);
+    if (options.odometry == OdometrySource::kNone) {
       for (Slam2dInput& in : data.inputs) in.odometry.reset();
       data.odometry_kind = "none";
     }
@@ -182,9 +198,10 @@ Slam2dDataset loadSlam2dDataset(const std::string& source, const std::string& re
     throw std::runtime_error("unknown simulated source " + source + " (sim:building)");
   } else {
     if (!std::filesystem::exists(source)) throw std::runtime_error(source + ": no such file");
-    data = fromLog(source, odometry);
+    data = fromLog(source, options.odometry);
   }
-  if (!relations_path.empty()) data.relations = datasets::readSlamRelations(relations_path);
+  if (!options.reference_path.empty()) useReferenceLog(data, options.reference_path);
+  if (!options.relations_path.empty()) data.relations = datasets::readSlamRelations(options.relations_path);
   return data;
 }
 
