@@ -58,6 +58,8 @@ int main(int argc, char** argv) {
   d->add_option("--relations", slam2d.relations_path, "Kümmerle et al. relation file (t1 t2 x y z roll pitch yaw)");
   d->add_option("--reference", slam2d.reference_path,
                 "CARMEN log whose scan poses at the same stamps are the reference for ATE/RPE (default: the log's own)");
+  d->add_option("--stamps-from", slam2d.stamps_path,
+                "CARMEN log holding the same scans with the stamps the relations use (a corrected log's raw log)");
   d->add_option("--json", slam2d.json_out, "write results as JSON to this file");
   d->add_option("--poses", slam2d.poses_out, "write the estimated laser poses (stamp_s x y theta) to this file");
   d->add_option("--odometry", slam2d.odometry,

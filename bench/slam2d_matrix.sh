@@ -38,11 +38,22 @@ for log in "$data"/carmen-2d-raw/*.clf*; do
   [ -f "$data/relations/$name.relations" ] && args+=(--relations "$data/relations/$name.relations")
   run "raw-$name" "${args[@]}"
 done
+# Corrected logs hold scans of these raw logs (same ranges; data README): the raw
+# log gives them the stamps the relation files use.
+declare -A raw_of=([intel-corrected]=intel.clf.bz2 [freiburg-079-corrected]=fr079.clf.bz2
+                   [csail-corrected]=mit-csail.clf.gz [csail-corrected-subset.robotlaser1]=mit-csail.clf.gz)
 for log in "$data"/carmen-2d/*.log*; do
   [ -e "$log" ] || continue
   name=$(basename "$log")
   name=${name%%.log*}
-  run "corrected-${name/-corrected/}" --log "$log"  # auto: ODOM increments, none without ODOM lines
+  args=(--log "$log")  # auto odometry: ODOM increments, none without ODOM lines
+  raw=${raw_of[$name]:-}
+  if [ -n "$raw" ] && [ -f "$data/carmen-2d-raw/$raw" ]; then
+    args+=(--stamps-from "$data/carmen-2d-raw/$raw")
+    relations=$data/relations/${raw%%.*}.relations
+    [ -f "$relations" ] && args+=(--relations "$relations")
+  fi
+  run "corrected-${name/-corrected/}" "${args[@]}"
 done
 # Raw logs scored against a corrected log of a subset of their scans (same stamps; data README).
 for pair in "mit-csail.clf.gz:csail-corrected-subset.robotlaser1.log.gz"; do

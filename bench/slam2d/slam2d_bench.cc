@@ -129,6 +129,7 @@ int runSlam2dBench(const Slam2dBenchOptions& options) {
   Slam2dSourceOptions source;
   source.relations_path = options.relations_path;
   source.reference_path = options.reference_path;
+  source.stamps_path = options.stamps_path;
   source.odometry = parseOdometrySource(options.odometry);
   source.sim = options.sim;
   Slam2dDataset data = loadSlam2dDataset(options.source, source);
@@ -165,6 +166,8 @@ int runSlam2dBench(const Slam2dBenchOptions& options) {
             {"reference", data.reference_kind},
             {"reference_file", options.reference_path},
             {"reference_poses", scored.reference.size()},
+            {"stamps_file", options.stamps_path},
+            {"stamps_replaced", data.stamps_replaced},
             {"relations_file", options.relations_path},
             {"relations_total", data.relations.size()},
             {"relations_used", rel.relations_used},

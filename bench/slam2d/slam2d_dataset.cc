@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <limits>
 #include <numbers>
 #include <random>
 #include <stdexcept>
@@ -160,6 +161,51 @@ Slam2dDataset simulateBuilding(const Slam2dSimOptions& o) {
   return data;
 }
 
+/// The ranges of a scan to the millimetre; readings at or beyond `cut` (and
+/// non-finite ones) alike, so two logs whose no-return ranges differ agree.
+std::vector<int32_t> rangeKey(const slam2d::LaserScan& scan, float cut) {
+  std::vector<int32_t> key(scan.ranges_m.size());
+  for (size_t i = 0; i < key.size(); ++i) {
+    const float r = scan.ranges_m[i];
+    key[i] = std::isfinite(r) && r < cut ? int32_t(std::lround(double(r) * 1000.0)) : -1;
+  }
+  return key;
+}
+
+struct RangeKeyHash {
+  size_t operator()(const std::vector<int32_t>& key) const {
+    uint64_t h = 1469598103934665603ull;  // FNV-1a over the values
+    for (int32_t v : key) h = (h ^ uint32_t(v)) * 1099511628211ull;
+    return size_t(h);
+  }
+};
+
+/// Gives each scan found (by its ranges) in the log at `path` that log's
+/// stamp; scans that appear there more than once (a robot standing still)
+/// keep theirs.
+void takeStampsFrom(Slam2dDataset& data, const std::string& path) {
+  const datasets::CarmenLog log = datasets::readCarmenLog(path);
+  float cut = std::numeric_limits<float>::infinity();
+  for (const datasets::CarmenScan& s : log.scans) cut = std::min(cut, s.scan.range_max_m);
+  for (const Slam2dInput& in : data.inputs) cut = std::min(cut, in.scan.range_max_m);
+  constexpr int64_t kAmbiguous = std::numeric_limits<int64_t>::min();
+  std::unordered_map<std::vector<int32_t>, int64_t, RangeKeyHash> stamps;
+  for (const datasets::CarmenScan& s : log.scans) {
+    const auto [it, inserted] = stamps.emplace(rangeKey(s.scan, cut), s.scan.stamp_ns);
+    if (!inserted) it->second = kAmbiguous;
+  }
+  for (Slam2dInput& in : data.inputs) {
+    const auto it = stamps.find(rangeKey(in.scan, cut));
+    if (it == stamps.end() || it->second == kAmbiguous) continue;
+    in.scan.stamp_ns = it->second;
+    ++data.stamps_replaced;
+  }
+  if (data.stamps_replaced == 0) throw std::runtime_error(path + ": holds none of the log's scans, no stamps to take");
+  std::vector<int64_t> all;
+  for (const Slam2dInput& in : data.inputs) all.push_back(in.scan.stamp_ns);
+  data.duration_s = spanOfStamps(std::move(all));
+}
+
 /// Replaces the reference with the laser poses of `path` at equal stamps.
 void useReferenceLog(Slam2dDataset& data, const std::string& path) {
   const datasets::CarmenLog log = datasets::readCarmenLog(path);
@@ -200,6 +246,7 @@ Slam2dDataset loadSlam2dDataset(const std::string& source, const Slam2dSourceOpt
     if (!std::filesystem::exists(source)) throw std::runtime_error(source + ": no such file");
     data = fromLog(source, options.odometry);
   }
+  if (!options.stamps_path.empty()) takeStampsFrom(data, options.stamps_path);
   if (!options.reference_path.empty()) useReferenceLog(data, options.reference_path);
   if (!options.relations_path.empty()) data.relations = datasets::readSlamRelations(options.relations_path);
   return data;

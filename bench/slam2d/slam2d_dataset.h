@@ -63,6 +63,7 @@ struct Slam2dDataset {
   /// consecutive sorted stamps, as in logs whose stamps were rounded or garbled).
   std::optional<double> duration_s;
   size_t skipped_lines = 0;  ///< log lines of other messages
+  size_t stamps_replaced = 0;  ///< scans that took their stamp from Slam2dSourceOptions::stamps_path
 };
 
 struct Slam2dSourceOptions {
@@ -71,6 +72,11 @@ struct Slam2dSourceOptions {
   /// of the source with the same stamps, e.g. a corrected subset of a raw
   /// log; empty: the source's own logged poses.
   std::string reference_path;
+  /// A CARMEN log holding the same scans (same ranges to the millimetre)
+  /// with the stamps the relations use: each scan found there once takes its
+  /// stamp. Corrected logs keep only some scans of a raw log and rewrote
+  /// their stamps; this finds them in the raw log. Empty: none.
+  std::string stamps_path;
   OdometrySource odometry = OdometrySource::kAuto;
   Slam2dSimOptions sim;
 };

@@ -118,6 +118,28 @@ TEST(Slam2dBench, ReferenceLogMatchesOnStamps) {
   fs::remove(reference);
 }
 
+TEST(Slam2dBench, StampsFromTheLogHoldingTheSameScans) {
+  const fs::path path = tempPath("subset.log"), raw = tempPath("raw.log");
+  std::ofstream(path) << "FLASER 3 1 2 3.5 0 0 0 0 0 0 0.5 h 0\nFLASER 3 1 2 4 0 0 0 0 0 0 0.6 h 0\n";
+  // The raw log has the second scan (to the millimetre) and others, under its
+  // own stamps; its largest reading is higher, so 4 is a return there but a
+  // no return in the subset, and must still match.
+  std::ofstream(raw) << "FLASER 3 1 2 3.5 0 0 0 0 0 0 976052857.3 h 0\n"
+                        "FLASER 3 1.0001 2 4 0 0 0 0 0 0 976052857.337284 h 0\n"
+                        "FLASER 3 1 3 5 0 0 0 0 0 0 976052858.0 h 0\n"
+                        "FLASER 3 1 2 3.5 0 0 0 0 0 0 976052859.0 h 0\n";
+  Slam2dSourceOptions o;
+  o.stamps_path = raw.string();
+  const Slam2dDataset d = loadSlam2dDataset(path.string(), o);
+  EXPECT_EQ(d.stamps_replaced, 1u);
+  EXPECT_EQ(d.inputs[0].scan.stamp_ns, 500000000);  // twice in the raw log: ambiguous, kept
+  EXPECT_EQ(d.inputs[1].scan.stamp_ns, 976052857337284000);
+  std::ofstream(raw) << "FLASER 3 9 9 9 0 0 0 0 0 0 1 h 0\n";
+  EXPECT_THROW(loadSlam2dDataset(path.string(), o), std::runtime_error);
+  fs::remove(path);
+  fs::remove(raw);
+}
+
 TEST(Slam2dBench, BadSourcesAreClearErrors) {
   EXPECT_THROW(loadSlam2dDataset("sim:nowhere", {}), std::runtime_error);
   EXPECT_THROW(loadSlam2dDataset("/nonexistent/log.gz", {}), std::runtime_error);
