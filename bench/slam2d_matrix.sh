@@ -68,13 +68,13 @@ done
 
 # One row per run; "–" where a figure does not apply (NaN or absent in the JSON).
 {
-  echo "| run | scans | odometry | relations used | rel. trans. error m (mean ± std) | rel. rot. error ° (mean ± std) | ATE m | RPE 1 m | ×real time | CPU s | ATE vs truth m | refl. rel. err. | spread raw → calibrated |"
-  echo "|---|---:|---|---:|---|---|---:|---:|---:|---:|---:|---:|---|"
+  echo "| run | scans | odometry | relations used | rel. trans. error m (mean ± std) | rel. rot. error ° (mean ± std) | reference's rel. trans. error m | ATE m | RPE 1 m | ×real time | CPU s | ATE vs truth m | refl. rel. err. | spread raw → calibrated |"
+  echo "|---|---:|---|---:|---|---|---|---:|---:|---:|---:|---:|---:|---|"
   for name in "${runs[@]}"; do
     jq -r --arg name "$name" '
       def f(d): if . == null then "–" else (. * pow(10; d) | round / pow(10; d) | tostring) end;
       def pm(x; d): if x.mean == null then "–" else "\(x.mean | f(d)) ± \(x.std | f(d))" end;
-      "| \($name) | \(.scans) | \(.odometry) | \(.relations_used) | \(pm(.rel_trans_err_m; 4)) | \(pm(.rel_rot_err_deg; 3)) | \(.ate_vs_reference_m | f(3)) | \(.rpe_1m_m | f(4)) | \(.realtime_factor | f(0)) | \(.cpu_s | f(2)) | \(.ate_vs_truth_m | f(4)) | \(.reflectivity_rel_err_median | f(3)) | \(if .reflectivity_spread_raw == null then "–" else "\(.reflectivity_spread_raw | f(3)) → \(.reflectivity_spread_calibrated | f(3))" end) |"
+      "| \($name) | \(.scans) | \(.odometry) | \(.relations_used) | \(pm(.rel_trans_err_m; 4)) | \(pm(.rel_rot_err_deg; 3)) | \(pm(.reference_rel_trans_err_m; 4)) | \(.ate_vs_reference_m | f(3)) | \(.rpe_1m_m | f(4)) | \(.realtime_factor | f(0)) | \(.cpu_s | f(2)) | \(.ate_vs_truth_m | f(4)) | \(.reflectivity_rel_err_median | f(3)) | \(if .reflectivity_spread_raw == null then "–" else "\(.reflectivity_spread_raw | f(3)) → \(.reflectivity_spread_calibrated | f(3))" end) |"
     ' "$out/$name.json"
   done
 } | tee "$out/table.md"
