@@ -6,7 +6,7 @@
 # JSON and one text log per run in out/bench/slam2d/ and prints a markdown
 # table for docs/BENCHMARKS.md (also written to out/bench/slam2d/table.md).
 # Needs a Release build of rmap-bench and jq. Extra arguments go to every run
-# (e.g. --no-odometry).
+# (engine options such as --resolution 0.1; not --odometry, which the runs set).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bench=build/bin/rmap-bench
@@ -34,9 +34,12 @@ for log in "$data"/carmen-2d-raw/*.clf*; do
   [ -e "$log" ] || continue
   name=$(basename "$log")
   name=${name%%.clf*}
-  args=(--log "$log" --odometry logged)  # raw logs: the logged poses are raw odometry
-  [ -f "$data/relations/$name.relations" ] && args+=(--relations "$data/relations/$name.relations")
-  run "raw-$name" "${args[@]}"
+  args=(--log "$log")
+  if [ -f "$data/relations/$name.relations" ]; then
+    args+=(--relations "$data/relations/$name.relations")
+    run "raw-$name-no-odometry" "${args[@]}" --odometry none  # scan matching alone
+  fi
+  run "raw-$name" "${args[@]}" --odometry logged  # raw logs: the logged poses are raw odometry
 done
 # Corrected logs hold scans of these raw logs (same ranges; data README): the raw
 # log gives them the stamps the relation files use.
