@@ -52,6 +52,12 @@ struct Slam2dOptions {
   /// Matching uses endpoints at least this far apart (m), so dense scans cost
   /// no more than sparse ones; the map update uses every beam.
   double match_point_spacing_m = 0.05;
+  /// Without an odometry step the prediction (constant velocity) can be far
+  /// off: the matcher then first searches headings and translations within
+  /// this much of it (ScanMatcherOptions::search_rad, search_m; with
+  /// odometry the search is off).
+  double search_without_odometry_rad = 0.8;
+  double search_without_odometry_m = 0.4;
   OccupancyUpdate occupancy;             ///< log-odds of hits and misses, clamping
   ScanMatcherOptions matcher;            ///< iterations, damping, step bounds (reflectivity weight set from above)
   IncidenceOptions incidence;            ///< per-beam incidence for the calibration
