@@ -10,10 +10,14 @@
 #include <unordered_map>
 #include <vector>
 
+#include "slam2d/calibration_sampler.h"
 #include "slam2d/grid_map.h"
+#include "slam2d/incidence.h"
+#include "slam2d/intensity_calibration.h"
 #include "slam2d/laser_scan.h"
 #include "slam2d/pose2.h"
 #include "slam2d/scan_matcher.h"
+#include "slam2d/self_calibration.h"
 
 namespace rmap::slam2d {
 
@@ -32,19 +36,38 @@ struct Slam2dOptions {
   bool use_odometry = true;              ///< odometry as prediction and prior when scans carry it
   /// Prior weight on the odometry prediction, per unit of the mean per-point
   /// data term (see PosePrior): x and y (1/m²), θ (1/rad²). The prediction
-  /// always seeds the matcher; the prior only adds a pull towards it. Off by
-  /// default: wheel odometry of real robots is biased (turns above all), and
-  /// on the raw intel and fr079 logs every weight tried raised the relation
-  /// error; the matcher's damping already keeps directions that the scan
-  /// leaves free (corridor axis) at the prediction.
-  double odometry_information_xy = 0.0;
+  /// always seeds the matcher; the prior adds a pull towards it. Wheel
+  /// odometry of real robots is good in translation over one scan and biased
+  /// in heading, so only translation gets a (weak) pull: on the raw intel log
+  /// it stops the pose from jittering by several cm while the robot turns on
+  /// the spot, which otherwise, in one run in three, broke the map when the
+  /// robot came back (relation error 0.02–0.18 m over beam spacings 0.025–0.1 m
+  /// without it, 0.02–0.05 m with it); any heading weight raised the error.
+  double odometry_information_xy = 0.05;
   double odometry_information_theta = 0.0;
-  double reflectivity_weight = 0.0;      ///< weight of the reflectivity residual (0 = off)
+  /// Weight of the reflectivity residual in the matcher, per point relative
+  /// to the occupancy residual (0 = off). Reflectivity ρ is dimensionless
+  /// (≈ 0–1), the occupancy residual too, so 1 weighs them alike.
+  double reflectivity_weight = 0.0;
   /// Matching uses endpoints at least this far apart (m), so dense scans cost
   /// no more than sparse ones; the map update uses every beam.
   double match_point_spacing_m = 0.05;
+  /// Without an odometry step the prediction (constant velocity) can be far
+  /// off: the matcher then first searches headings and translations within
+  /// this much of it (ScanMatcherOptions::search_rad, search_m; with
+  /// odometry the search is off).
+  double search_without_odometry_rad = 0.8;
+  double search_without_odometry_m = 0.4;
   OccupancyUpdate occupancy;             ///< log-odds of hits and misses, clamping
   ScanMatcherOptions matcher;            ///< iterations, damping, step bounds (reflectivity weight set from above)
+  IncidenceOptions incidence;            ///< per-beam incidence for the calibration
+  /// Self-calibration of a scanner model that has no calibration set: a
+  /// sample of readings of map cells (see CalibrationSampler) is collected at
+  /// map updates, and selfCalibrate runs once it is ready; reflectivity of
+  /// that model is fused from then on (the sample itself included).
+  bool self_calibration = true;
+  CalibrationSamplerOptions calibration_sample;
+  SelfCalibrationOptions self_calibration_fit;
 
   /// @throws std::invalid_argument naming the first bad option
   void validate() const;
@@ -54,6 +77,11 @@ class Slam2d {
  public:
   /// @throws std::invalid_argument for bad options
   explicit Slam2d(Slam2dOptions options = {});
+
+  /// Sets the calibration used for scans of `model` (replacing self-calibration for it).
+  void setCalibration(const std::string& model, IntensityCalibration calibration);
+  /// The calibration in use for `model` (set or self-calibrated), if any.
+  const IntensityCalibration* calibration(const std::string& model) const;
 
   /// Processes one scan of `trajectory` (created on first use, starting at
   /// `odometry` when given — robots that share a map must send odometry in
@@ -79,8 +107,18 @@ class Slam2d {
     Pose2 last_update_pose;         ///< pose at the last map update
   };
 
+  struct ScannerModel {
+    std::optional<IntensityCalibration> calibration;
+    std::optional<CalibrationSampler> sampler;  ///< while self-calibration is collecting
+    bool tried_full = false;                    ///< one attempt is made once the sample is full
+  };
+
+  /// Self-calibrates `model` from its sample when ready; fuses the sample on success.
+  void maybeSelfCalibrate(ScannerModel& model);
+
   Slam2dOptions options_;
   GridMap2d map_;
+  std::unordered_map<std::string, ScannerModel> models_;
   std::unordered_map<std::string, Trajectory> trajectories_;
   uint64_t version_ = 0;
 };
