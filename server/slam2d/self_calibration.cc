@@ -251,15 +251,25 @@ LogModelFit fitUnsaturated(const std::vector<LogReading>& all, const std::vector
   };
   LogModelFit result = fit(level);
   if (!detected) return result;
-  std::vector<double> shortfall;  // ln(I / predicted) of the readings at or above the level
+  // ln(I / predicted) of the readings at or above the level (the pile) and
+  // of those just below it (the control: same selection, same outliers).
+  const double log_level = std::log(level), clearly_short = -std::max(0.05, 3.0 * result.sigma);
+  size_t pile = 0, pile_short = 0, control = 0, control_short = 0;
   for (const LogReading& r : all) {
     const double log_rho = result.log_reflectivity[r.patch];
-    if (r.log_i < std::log(level) || !std::isfinite(log_rho)) continue;
-    shortfall.push_back(r.log_i - log_rho - result.calibration.logRange()(r.log_r) -
-                        result.calibration.logIncidence()(r.alpha_deg));
+    if (r.log_i < log_level - 0.3 || !std::isfinite(log_rho)) continue;
+    const bool short_of_g = r.log_i - log_rho - result.calibration.logRange()(r.log_r) -
+                                result.calibration.logIncidence()(r.alpha_deg) < clearly_short;
+    if (r.log_i >= log_level) pile++, pile_short += short_of_g;
+    else control++, control_short += short_of_g;
   }
-  constexpr size_t kFewest = 10;  // fewer cannot refute the pile: keep it
-  if (shortfall.size() >= kFewest && median(shortfall) > -std::max(0.05, 3.0 * result.sigma)) {
+  // Confirmed when at least 5 % of the pile reads clearly (3σ) less than
+  // predicted and three times as often as the control does; fewer than ten
+  // readings in the pile cannot refute it.
+  constexpr size_t kFewest = 10;
+  const double pile_rate = pile ? double(pile_short) / pile : 0.0;
+  const double control_rate = control ? double(control_short) / control : 0.0;
+  if (pile >= kFewest && !(pile_rate >= 0.05 && pile_rate > 3.0 * control_rate)) {
     result = fit(std::numeric_limits<double>::infinity());
   }
   return result;
@@ -308,12 +318,14 @@ double detectSaturation(const std::vector<float>& intensities) {
   const double sigma = std::max(0.5 * kBin, upper > 0 ? std::sqrt(upper_sq / upper) : 0.0);
   if (sigma > kMaxPileSigma) return kInf;
   const double threshold = center - 3.0 * sigma;
-  size_t in_pile = 0, below = 0;  // the pile's window and an equally wide one just below it
+  // A peak: twice as dense as the readings in an equally wide window just below the pile.
+  size_t in_pile = 0, below = 0;
   for (double l : x) {
     if (l >= threshold) ++in_pile;
     else if (l >= 2.0 * threshold) ++below;
   }
-  const bool pile = in_pile >= std::max<size_t>(20, positive / 1000) && 2 * in_pile > 3 * below;
+  const double peak_density = peak_count / (5.0 * kBin), below_density = below / -threshold;
+  const bool pile = in_pile >= std::max<size_t>(20, positive / 1000) && peak_density > 2.0 * below_density;
   return pile ? max_i * std::exp(threshold) : kInf;
 }
 

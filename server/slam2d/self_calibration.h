@@ -55,8 +55,10 @@ struct CalibrationFitOptions {
 
 /// Saturation level of a scanner from its readings: the saturated ones pile
 /// up in a narrow peak (receiver noise, at most ±15 %) at the top of the
-/// count range, denser than the readings just below it. Readings at or above
-/// the returned level (the peak's lower 3σ edge) are saturated.
+/// count range, twice as dense as the readings just below it. Readings at or
+/// above the returned level (the peak's lower 3σ edge) are saturated. A
+/// crowd of bright unclipped readings can look the same; the fits therefore
+/// keep the level only when the readings above it fall short of g.
 /// @return counts, or +inf when there is no such peak
 double detectSaturation(const std::vector<float>& intensities);
 
