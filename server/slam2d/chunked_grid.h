@@ -1,0 +1,96 @@
+#pragma once
+/// @file chunked_grid.h
+/// Unbounded 2D array of cells stored in square chunks that are allocated on
+/// first write, so a map grows in every direction as the robot goes.
+///
+/// Chunks are found through an open-addressing hash table (linear probing,
+/// load ≤ 1/2) keyed by chunk indices: a read is one multiply, usually one
+/// probe and two loads, which keeps the scan matcher's hot path cheap while
+/// robots far apart cost nothing for the space between them. Cells never move
+/// once allocated. Reads are const and may run concurrently; writes may not.
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+namespace rmap::slam2d {
+
+template <class Cell>
+class ChunkedGrid {
+ public:
+  /// Chunk edge is 2^kChunkBits cells (64).
+  static constexpr int kChunkBits = 6;
+  static constexpr int kChunkEdge = 1 << kChunkBits;
+  static constexpr int kChunkMask = kChunkEdge - 1;
+  using Chunk = std::array<Cell, kChunkEdge * kChunkEdge>;
+
+  /// Cell at integer indices, nullptr when its chunk was never written.
+  const Cell* find(int x, int y) const {
+    const Chunk* chunk = findChunk(x >> kChunkBits, y >> kChunkBits);
+    return chunk ? &(*chunk)[offset(x, y)] : nullptr;
+  }
+
+  /// Cell at integer indices, allocating its chunk (cells default-constructed).
+  Cell& at(int x, int y) {
+    const int cx = x >> kChunkBits, cy = y >> kChunkBits;
+    Chunk* chunk = const_cast<Chunk*>(findChunk(cx, cy));
+    if (!chunk) chunk = insertChunk(cx, cy);
+    return (*chunk)[offset(x, y)];
+  }
+
+  /// Number of allocated chunks.
+  size_t chunkCount() const { return chunks_.size(); }
+
+ private:
+  struct Slot {
+    uint64_t key = 0;
+    int32_t index = -1;  ///< into chunks_, −1 = empty slot
+  };
+
+  static size_t offset(int x, int y) { return (static_cast<size_t>(y & kChunkMask) << kChunkBits) | (x & kChunkMask); }
+  static uint64_t keyOf(int cx, int cy) {
+    return (static_cast<uint64_t>(static_cast<uint32_t>(cx)) << 32) | static_cast<uint32_t>(cy);
+  }
+  size_t slotOf(uint64_t key) const { return static_cast<size_t>((key * 0x9E3779B97F4A7C15ull) >> shift_); }
+
+  const Chunk* findChunk(int cx, int cy) const {
+    if (table_.empty()) return nullptr;
+    const uint64_t key = keyOf(cx, cy);
+    const size_t mask = table_.size() - 1;
+    for (size_t s = slotOf(key);; s = (s + 1) & mask) {
+      const Slot& slot = table_[s];
+      if (slot.index < 0) return nullptr;
+      if (slot.key == key) return chunks_[static_cast<size_t>(slot.index)].get();
+    }
+  }
+
+  Chunk* insertChunk(int cx, int cy) {
+    if (2 * (chunks_.size() + 1) > table_.size()) rehash(table_.empty() ? 64 : 2 * table_.size());
+    chunks_.push_back(std::make_unique<Chunk>());
+    place(keyOf(cx, cy), static_cast<int32_t>(chunks_.size() - 1));
+    return chunks_.back().get();
+  }
+
+  void place(uint64_t key, int32_t index) {
+    const size_t mask = table_.size() - 1;
+    size_t s = slotOf(key);
+    while (table_[s].index >= 0) s = (s + 1) & mask;
+    table_[s] = {key, index};
+  }
+
+  void rehash(size_t capacity) {
+    std::vector<Slot> old = std::move(table_);
+    table_.assign(capacity, Slot{});
+    shift_ = 64;
+    for (size_t c = capacity; c > 1; c >>= 1) --shift_;
+    for (const Slot& slot : old)
+      if (slot.index >= 0) place(slot.key, slot.index);
+  }
+
+  std::vector<std::unique_ptr<Chunk>> chunks_;
+  std::vector<Slot> table_;  ///< capacity a power of two
+  int shift_ = 64;           ///< 64 − log2(capacity): Fibonacci hashing takes the top bits
+};
+
+}  // namespace rmap::slam2d

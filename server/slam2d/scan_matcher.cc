@@ -1,0 +1,94 @@
+#include "slam2d/scan_matcher.h"
+
+#include <Eigen/Cholesky>
+#include <cmath>
+
+namespace rmap::slam2d {
+
+namespace {
+
+struct Normal {
+  Eigen::Matrix3d h = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d g = Eigen::Vector3d::Zero();
+  double residual = 0.0;
+};
+
+/// Accumulates the normal equations of the data terms at pose ξ on one level.
+Normal accumulate(const GridMap2d& map, int level, std::span<const MatchPoint> points, const Pose2& xi,
+                  double reflectivity_weight) {
+  const OccupancyGrid& grid = map.level(level);
+  const double c = std::cos(xi.theta_rad), s = std::sin(xi.theta_rad);
+  Normal n;
+  Eigen::Matrix3d h_refl = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d g_refl = Eigen::Vector3d::Zero();
+  const bool use_refl = level == 0 && reflectivity_weight > 0.0;
+  for (const MatchPoint& pt : points) {
+    const Eigen::Vector2d rotated(c * pt.p_m.x() - s * pt.p_m.y(), s * pt.p_m.x() + c * pt.p_m.y());
+    const Eigen::Vector2d w(rotated.x() + xi.x_m, rotated.y() + xi.y_m);
+    const OccupancyGrid::Sample m = grid.sample(w);
+    const double r = 1.0 - m.value;
+    n.residual += r;
+    // ∂S/∂θ = (−rotated.y, rotated.x).
+    const Eigen::Vector3d j(m.gradient_per_m.x(), m.gradient_per_m.y(),
+                            -m.gradient_per_m.x() * rotated.y() + m.gradient_per_m.y() * rotated.x());
+    n.h.noalias() += j * j.transpose();
+    n.g.noalias() += j * r;
+    if (use_refl && std::isfinite(pt.reflectivity)) {
+      const ReflectivityLayer::Sample rs = map.reflectivityLayer().sample(w);
+      if (rs.support < 0.25f) continue;  // no fused reflectivity near this endpoint
+      const double e = pt.reflectivity - rs.value;
+      const Eigen::Vector3d jr(rs.gradient_per_m.x(), rs.gradient_per_m.y(),
+                               -rs.gradient_per_m.x() * rotated.y() + rs.gradient_per_m.y() * rotated.x());
+      h_refl.noalias() += jr * jr.transpose();
+      g_refl.noalias() += jr * e;
+    }
+  }
+  const double inv_n = 1.0 / static_cast<double>(points.size());
+  n.h = (n.h + reflectivity_weight * h_refl) * inv_n;
+  n.g = (n.g + reflectivity_weight * g_refl) * inv_n;
+  n.residual *= inv_n;
+  return n;
+}
+
+}  // namespace
+
+MatchResult matchScan(const GridMap2d& map, std::span<const MatchPoint> points, const Pose2& initial,
+                      const std::optional<PosePrior>& prior, const ScanMatcherOptions& options) {
+  MatchResult result;
+  result.pose = initial;
+  if (points.empty() || map.empty()) return result;
+  Pose2 xi = initial;
+  for (int level = map.levelCount() - 1; level >= 0; --level) {
+    const int iterations = level == 0 ? options.fine_iterations : options.coarse_iterations;
+    const double max_step_m = options.max_step_cells * map.level(level).resolution_m();
+    for (int it = 0; it < iterations; ++it) {
+      Normal n = accumulate(map, level, points, xi, options.reflectivity_weight);
+      ++result.iterations;
+      if (prior) {
+        const Eigen::Vector3d e(xi.x_m - prior->pose.x_m, xi.y_m - prior->pose.y_m,
+                                normalizeAngle(xi.theta_rad - prior->pose.theta_rad));
+        n.h.diagonal() += prior->information;
+        n.g -= prior->information.cwiseProduct(e);
+      }
+      // Levenberg damping: a floor under every direction, so a flat one
+      // (corridor axis) gets a small step rather than an arbitrary one.
+      const double trace = n.h.trace();
+      if (!(trace > 1e-12) || !std::isfinite(trace)) break;
+      n.h.diagonal().array() += options.damping * trace / 3.0;
+      Eigen::Vector3d step = n.h.ldlt().solve(n.g);
+      if (!step.allFinite()) break;
+      const double t = step.head<2>().norm();
+      if (t > max_step_m) step.head<2>() *= max_step_m / t;
+      step.z() = std::clamp(step.z(), -options.max_step_rad, options.max_step_rad);
+      xi = {xi.x_m + step.x(), xi.y_m + step.y(), normalizeAngle(xi.theta_rad + step.z())};
+      if (step.head<2>().norm() < options.converged_m && std::abs(step.z()) < options.converged_rad) break;
+    }
+  }
+  const Normal final_terms = accumulate(map, 0, points, xi, 0.0);
+  result.hessian = final_terms.h;
+  result.mean_residual = final_terms.residual;
+  if (xi.isFinite()) result.pose = xi;
+  return result;
+}
+
+}  // namespace rmap::slam2d

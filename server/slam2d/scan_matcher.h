@@ -1,0 +1,62 @@
+#pragma once
+/// @file scan_matcher.h
+/// Hector scan-to-map matching (Kohlbrecher et al., SSRR 2011): Gauss–Newton
+/// on Σ (1 − M(S_i(ξ)))² over the beam endpoints S_i, coarse to fine over the
+/// occupancy pyramid, with
+///  - an optional pose prior (the odometry prediction) as a weighted residual;
+///  - an optional reflectivity residual on the finest level, Σ w (ρ_i − R(S_i(ξ)))²,
+///    which constrains directions the geometry leaves free (a corridor with
+///    differently reflective stretches);
+///  - Levenberg damping and a step bound, so a degenerate Hessian (corridor,
+///    open space) leaves the unconstrained directions at the initial guess
+///    instead of sending them anywhere; a non-finite step is rejected.
+
+#include <Eigen/Core>
+#include <optional>
+#include <span>
+
+#include "slam2d/grid_map.h"
+#include "slam2d/pose2.h"
+
+namespace rmap::slam2d {
+
+struct ScanMatcherOptions {
+  int coarse_iterations = 3;          ///< Gauss–Newton iterations on each coarser level
+  int fine_iterations = 5;            ///< ... and on the finest level
+  double damping = 1e-2;              ///< Levenberg term, relative to the Hessian's trace
+  double max_step_cells = 1.5;        ///< translation bound of one step, in cells of the level
+  double max_step_rad = 0.15;         ///< rotation bound of one step (rad)
+  double converged_m = 1e-4;          ///< stop a level when a step is below this translation (m) ...
+  double converged_rad = 1e-4;        ///< ... and this rotation (rad)
+  double reflectivity_weight = 0.0;   ///< per-point weight of the reflectivity residual (0 = off)
+};
+
+/// One endpoint in the robot base frame (m), with its calibrated reflectivity (NaN = none).
+struct MatchPoint {
+  Eigen::Vector2d p_m;
+  float reflectivity = std::numeric_limits<float>::quiet_NaN();
+};
+
+/// Pose prior: residual diag(information)·(ξ − pose), in the units of the
+/// mean per-point data term (so it does not depend on the beam count).
+struct PosePrior {
+  Pose2 pose;
+  Eigen::Vector3d information = Eigen::Vector3d::Zero();  ///< 1/m², 1/m², 1/rad²
+};
+
+struct MatchResult {
+  Pose2 pose;
+  /// Mean per-point Gauss–Newton Hessian of the occupancy term at the finest
+  /// level, x y θ: its small eigenvalues flag degenerate geometry.
+  Eigen::Matrix3d hessian = Eigen::Matrix3d::Zero();
+  /// Mean of 1 − M over the points at the result (0 = every endpoint on a sure wall).
+  double mean_residual = 1.0;
+  int iterations = 0;
+};
+
+/// Matches a scan against the map from `initial` (robot base pose, map frame).
+/// Always returns a finite pose: `initial` (or the prior) when nothing constrains it.
+MatchResult matchScan(const GridMap2d& map, std::span<const MatchPoint> points, const Pose2& initial,
+                      const std::optional<PosePrior>& prior, const ScanMatcherOptions& options);
+
+}  // namespace rmap::slam2d

@@ -1,0 +1,136 @@
+#include "slam2d/slam2d.h"
+
+#include <cmath>
+#include <stdexcept>
+
+namespace rmap::slam2d {
+
+namespace {
+
+/// Poses farther out than this are refused: cell indices must fit in int at any resolution ≥ 1 mm.
+constexpr double kMaxCoordinate_m = 1e6;
+
+void require(bool ok, const std::string& what) {
+  if (!ok) throw std::invalid_argument("Slam2dOptions: " + what);
+}
+
+void checkPose(const Pose2& p, const char* what) {
+  if (!p.isFinite() || std::abs(p.x_m) > kMaxCoordinate_m || std::abs(p.y_m) > kMaxCoordinate_m)
+    throw std::invalid_argument(std::string("Slam2d::addScan: ") + what + " is not finite or beyond 1e6 m");
+}
+
+}  // namespace
+
+void Slam2dOptions::validate() const {
+  require(resolution_m >= 1e-3 && resolution_m <= 10.0, "resolution_m must be in [0.001, 10]");
+  require(levels >= 1 && levels <= 8, "levels must be in [1, 8]");
+  require(map_update_distance_m >= 0.0 && std::isfinite(map_update_distance_m), "map_update_distance_m must be ≥ 0");
+  require(map_update_angle_rad >= 0.0 && std::isfinite(map_update_angle_rad), "map_update_angle_rad must be ≥ 0");
+  require(range_min_m >= 0.0f && range_max_m > range_min_m && std::isfinite(range_max_m),
+          "need 0 ≤ range_min_m < range_max_m < inf");
+  require(odometry_information_xy >= 0.0 && odometry_information_theta >= 0.0 &&
+              std::isfinite(odometry_information_xy) && std::isfinite(odometry_information_theta),
+          "odometry information must be finite and ≥ 0");
+  require(reflectivity_weight >= 0.0 && std::isfinite(reflectivity_weight), "reflectivity_weight must be ≥ 0");
+  require(match_point_spacing_m >= 0.0 && std::isfinite(match_point_spacing_m), "match_point_spacing_m must be ≥ 0");
+  require(occupancy.hit_log_odds > 0.0f && occupancy.miss_log_odds < 0.0f &&
+              occupancy.min_log_odds < 0.0f && occupancy.max_log_odds > 0.0f,
+          "occupancy: need hit > 0 > miss and min < 0 < max");
+  require(matcher.coarse_iterations >= 0 && matcher.fine_iterations >= 0, "matcher iterations must be ≥ 0");
+  require(matcher.damping >= 0.0 && matcher.max_step_cells > 0.0 && matcher.max_step_rad > 0.0,
+          "matcher damping ≥ 0 and step bounds > 0");
+}
+
+Slam2d::Slam2d(Slam2dOptions options)
+    : options_((options.validate(), options)), map_(options_.resolution_m, options_.levels) {
+  options_.matcher.reflectivity_weight = options_.reflectivity_weight;
+}
+
+std::optional<Pose2> Slam2d::pose(const std::string& trajectory) const {
+  const auto it = trajectories_.find(trajectory);
+  if (it == trajectories_.end()) return std::nullopt;
+  return it->second.pose;
+}
+
+Pose2 Slam2d::addScan(const std::string& trajectory, const LaserScan& scan, const std::optional<Pose2>& odometry) {
+  // --- Check everything before touching any state.
+  const size_t n = scan.ranges_m.size();
+  if (scan.angles_rad.size() != n)
+    throw std::invalid_argument("Slam2d::addScan: " + std::to_string(scan.angles_rad.size()) + " angles for " +
+                                std::to_string(n) + " ranges");
+  if (!scan.intensities.empty() && scan.intensities.size() != n)
+    throw std::invalid_argument("Slam2d::addScan: " + std::to_string(scan.intensities.size()) +
+                                " intensities for " + std::to_string(n) + " ranges");
+  checkPose(scan.sensor_mount, "sensor_mount");
+  if (odometry) checkPose(*odometry, "odometry");
+  bool any_finite = false;
+  for (size_t i = 0; i < n && !any_finite; ++i)
+    any_finite = std::isfinite(scan.ranges_m[i]) && std::isfinite(scan.angles_rad[i]);
+  if (!any_finite) throw std::invalid_argument("Slam2d::addScan: the scan has no finite beam");
+
+  // --- Endpoints in the base frame.
+  const float range_min = std::max(options_.range_min_m, std::isfinite(scan.range_min_m) ? scan.range_min_m : 0.0f);
+  const float range_max = (scan.range_max_m > 0.0f && std::isfinite(scan.range_max_m))
+                              ? std::min(options_.range_max_m, scan.range_max_m)
+                              : options_.range_max_m;
+  std::vector<Eigen::Vector2d> ends_base;
+  ends_base.reserve(n);
+  for (size_t i = 0; i < n; ++i) {
+    const float r = scan.ranges_m[i], a = scan.angles_rad[i];
+    // The scan's max range itself is the "no return" reading of many scanners.
+    if (!std::isfinite(r) || !std::isfinite(a) || r < range_min || r >= range_max) continue;
+    ends_base.push_back(scan.sensor_mount * Eigen::Vector2d(r * std::cos(a), r * std::sin(a)));
+  }
+  std::vector<MatchPoint> points;
+  points.reserve(ends_base.size());
+  const double spacing2 = options_.match_point_spacing_m * options_.match_point_spacing_m;
+  for (const Eigen::Vector2d& p : ends_base)
+    if (points.empty() || (p - points.back().p_m).squaredNorm() >= spacing2) points.push_back({p});
+
+  // --- Predict, match, update.
+  const auto found = trajectories_.find(trajectory);
+  const bool is_new = found == trajectories_.end();
+  Trajectory track;
+  if (is_new) {
+    track.pose = odometry.value_or(Pose2{});
+  } else {
+    track = found->second;
+  }
+  const bool odometry_step = options_.use_odometry && odometry && track.odometry;
+  Pose2 predicted = track.pose;
+  if (!is_new) predicted = track.pose * (odometry_step ? between(*track.odometry, *odometry) : track.last_increment);
+
+  Pose2 estimate = predicted;
+  if (!is_new && !points.empty() && !map_.empty()) {
+    std::optional<PosePrior> prior;
+    if (odometry_step)
+      prior = PosePrior{predicted, {options_.odometry_information_xy, options_.odometry_information_xy,
+                                    options_.odometry_information_theta}};
+    estimate = matchScan(map_, points, predicted, prior, options_.matcher).pose;
+  } else if (is_new && !points.empty() && !map_.empty()) {
+    // A robot joining a shared map starts where its odometry says, then locks on.
+    estimate = matchScan(map_, points, predicted, std::nullopt, options_.matcher).pose;
+  }
+  if (!estimate.isFinite() || std::abs(estimate.x_m) > kMaxCoordinate_m || std::abs(estimate.y_m) > kMaxCoordinate_m)
+    estimate = predicted;
+
+  const Pose2 moved = between(track.last_update_pose, estimate);
+  const bool update = is_new || map_.empty() || moved.translation().norm() >= options_.map_update_distance_m ||
+                      std::abs(moved.theta_rad) >= options_.map_update_angle_rad;
+  if (update && !ends_base.empty()) {
+    const Pose2 sensor = estimate * scan.sensor_mount;
+    std::vector<Ray> rays;
+    rays.reserve(ends_base.size());
+    for (const Eigen::Vector2d& p : ends_base) rays.push_back({estimate * p, true});
+    map_.insert(sensor.translation(), rays, options_.occupancy, range_max);
+    track.last_update_pose = estimate;
+    ++version_;
+  }
+  track.last_increment = is_new ? Pose2{} : between(track.pose, estimate);
+  track.pose = estimate;
+  if (odometry) track.odometry = *odometry;
+  trajectories_[trajectory] = track;
+  return estimate;
+}
+
+}  // namespace rmap::slam2d

@@ -1,0 +1,79 @@
+#pragma once
+/// @file slam2d.h
+/// Hector-style 2D SLAM front end: one map (occupancy pyramid + reflectivity)
+/// shared by any number of robot trajectories, each tracked by scan-to-map
+/// matching with the odometry increment as an optional prior. No I/O, no threads.
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include "slam2d/grid_map.h"
+#include "slam2d/laser_scan.h"
+#include "slam2d/pose2.h"
+#include "slam2d/scan_matcher.h"
+
+namespace rmap::slam2d {
+
+/// All defaults are fixed across datasets (tuned on real logs, checked on held-out ones).
+struct Slam2dOptions {
+  double resolution_m = 0.05;            ///< finest level cell edge (m)
+  int levels = 3;                        ///< each level twice the cell edge of the one below
+  double map_update_distance_m = 0.1;    ///< the map is updated when the pose moved this far (m) ...
+  double map_update_angle_rad = 0.05;    ///< ... or turned this much (rad) since that trajectory's last update
+  float range_min_m = 0.1f;              ///< beams outside [min, max] are ignored (and outside the scan's own limits)
+  float range_max_m = 30.0f;
+  bool use_odometry = true;              ///< odometry as prediction and prior when scans carry it
+  /// Prior weight on the odometry prediction, per unit of the mean per-point
+  /// data term (see PosePrior): x and y (1/m²), θ (1/rad²).
+  double odometry_information_xy = 2.0;
+  double odometry_information_theta = 20.0;
+  double reflectivity_weight = 0.0;      ///< weight of the reflectivity residual (0 = off)
+  /// Matching uses endpoints at least this far apart (m), so dense scans cost
+  /// no more than sparse ones; the map update uses every beam.
+  double match_point_spacing_m = 0.05;
+  OccupancyUpdate occupancy;             ///< log-odds of hits and misses, clamping
+  ScanMatcherOptions matcher;            ///< iterations, damping, step bounds (reflectivity weight set from above)
+
+  /// @throws std::invalid_argument naming the first bad option
+  void validate() const;
+};
+
+class Slam2d {
+ public:
+  /// @throws std::invalid_argument for bad options
+  explicit Slam2d(Slam2dOptions options = {});
+
+  /// Processes one scan of `trajectory` (created on first use, starting at
+  /// `odometry` when given — robots that share a map must send odometry in
+  /// the map frame — else at the origin).
+  /// @param odometry  robot base pose from odometry at scan.stamp_ns, when known
+  /// @return the robot base pose estimate in the map frame
+  /// @throws std::invalid_argument with a clear message for a scan that cannot
+  ///         be used (sizes differ, no finite beam, non-finite mount or
+  ///         odometry); the state is then unchanged
+  Pose2 addScan(const std::string& trajectory, const LaserScan& scan, const std::optional<Pose2>& odometry);
+  std::optional<Pose2> pose(const std::string& trajectory) const;
+  /// The finest level, for rendering and export.
+  const GridMap2d& grid() const { return map_; }
+  /// Counts map updates; changes whenever grid() changed.
+  uint64_t version() const { return version_; }
+  const Slam2dOptions& options() const { return options_; }
+
+ private:
+  struct Trajectory {
+    Pose2 pose;
+    std::optional<Pose2> odometry;  ///< at the last scan
+    Pose2 last_increment;           ///< motion of the last scan, the prediction without odometry
+    Pose2 last_update_pose;         ///< pose at the last map update
+  };
+
+  Slam2dOptions options_;
+  GridMap2d map_;
+  std::unordered_map<std::string, Trajectory> trajectories_;
+  uint64_t version_ = 0;
+};
+
+}  // namespace rmap::slam2d
