@@ -41,7 +41,8 @@ std::string exportGridPgm(const Grid2dSource& grid) {
 std::string exportGridYaml(const Grid2dSource& grid, const std::string& image) {
   const Eigen::AlignedBox2i known = grid.knownCells();
   const double r = grid.resolutionM();
-  const Eigen::Vector2d origin = known.isEmpty() ? Eigen::Vector2d::Zero() : known.min().cast<double>() * r;
+  const Eigen::Vector2d origin =
+      known.isEmpty() ? Eigen::Vector2d(Eigen::Vector2d::Zero()) : Eigen::Vector2d(known.min().cast<double>() * r);
   return "image: " + image + "\nresolution: " + number(r) + "\norigin: [" + number(origin.x()) + ", " +
          number(origin.y()) + ", 0.0]\nnegate: 0\noccupied_thresh: " + number(kOccupiedThresh) +
          "\nfree_thresh: " + number(kFreeThresh) + "\nmode: trinary\n";
