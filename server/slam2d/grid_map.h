@@ -47,6 +47,7 @@ class GridMap2d {
   void addReflectivity(const Eigen::Vector2d& end_m, float reflectivity) {
     reflectivity_.add(cellOf(end_m), reflectivity);
   }
+  void addReflectivityToCell(const Eigen::Vector2i& cell, float reflectivity) { reflectivity_.add(cell, reflectivity); }
 
  private:
   std::vector<OccupancyGrid> levels_;

@@ -14,6 +14,22 @@ void require(bool ok, const std::string& what) {
   if (!ok) throw std::invalid_argument("Slam2dOptions: " + what);
 }
 
+uint64_t cellId(const Eigen::Vector2i& c) {
+  return (static_cast<uint64_t>(static_cast<uint32_t>(c.x())) << 32) | static_cast<uint32_t>(c.y());
+}
+Eigen::Vector2i cellFromId(uint64_t id) {
+  return {static_cast<int32_t>(static_cast<uint32_t>(id >> 32)), static_cast<int32_t>(static_cast<uint32_t>(id))};
+}
+
+/// A usable beam: endpoint in the base frame, range, raw intensity, cos incidence, reflectivity.
+struct Beam {
+  Eigen::Vector2d end_m;
+  float range_m;
+  float intensity = std::numeric_limits<float>::quiet_NaN();
+  float cos_incidence = std::numeric_limits<float>::quiet_NaN();
+  float reflectivity = std::numeric_limits<float>::quiet_NaN();
+};
+
 void checkPose(const Pose2& p, const char* what) {
   if (!p.isFinite() || std::abs(p.x_m) > kMaxCoordinate_m || std::abs(p.y_m) > kMaxCoordinate_m)
     throw std::invalid_argument(std::string("Slam2d::addScan: ") + what + " is not finite or beyond 1e6 m");
@@ -46,6 +62,37 @@ Slam2d::Slam2d(Slam2dOptions options)
   options_.matcher.reflectivity_weight = options_.reflectivity_weight;
 }
 
+void Slam2d::setCalibration(const std::string& model, IntensityCalibration calibration) {
+  ScannerModel& m = models_[model];
+  m.calibration = std::move(calibration);
+  m.sampler.reset();
+}
+
+const IntensityCalibration* Slam2d::calibration(const std::string& model) const {
+  const auto it = models_.find(model);
+  return it != models_.end() && it->second.calibration ? &*it->second.calibration : nullptr;
+}
+
+void Slam2d::maybeSelfCalibrate(ScannerModel& model) {
+  CalibrationSampler& sampler = *model.sampler;
+  const bool last_chance = sampler.full() && !model.tried_full;
+  if (!sampler.ready() && !last_chance) return;
+  model.tried_full = sampler.full();
+  try {
+    IntensityCalibration calibration = selfCalibrate(sampler.observations(), options_.self_calibration_fit);
+    for (const IntensityObservation& o : sampler.observations()) {
+      const double rho = calibration.reflectivity(o.intensity, o.range_m, o.cos_incidence);
+      if (std::isfinite(rho)) map_.addReflectivityToCell(cellFromId(o.cell_id), static_cast<float>(rho));
+    }
+    model.calibration = std::move(calibration);
+    model.sampler.reset();
+  } catch (const std::exception&) {
+    // Not enough independent views yet (the fit says why): collect more, or stop when full.
+    sampler.postpone();
+    if (model.tried_full) model.sampler.reset();
+  }
+}
+
 std::optional<Pose2> Slam2d::pose(const std::string& trajectory) const {
   const auto it = trajectories_.find(trajectory);
   if (it == trajectories_.end()) return std::nullopt;
@@ -73,19 +120,35 @@ Pose2 Slam2d::addScan(const std::string& trajectory, const LaserScan& scan, cons
   const float range_max = (scan.range_max_m > 0.0f && std::isfinite(scan.range_max_m))
                               ? std::min(options_.range_max_m, scan.range_max_m)
                               : options_.range_max_m;
-  std::vector<Eigen::Vector2d> ends_base;
-  ends_base.reserve(n);
+  // Intensity calibration state of this scanner (not created here: state is unchanged until the end).
+  const auto model_it = models_.find(scan.model);
+  const IntensityCalibration* calibration =
+      model_it != models_.end() && model_it->second.calibration ? &*model_it->second.calibration : nullptr;
+  const bool sampling = !calibration && options_.self_calibration &&
+                        (model_it == models_.end() || model_it->second.sampler.has_value());
+  const bool use_intensity = !scan.intensities.empty() && (calibration || sampling);
+  const std::vector<float> cos_incidence = use_intensity ? cosIncidence(scan, options_.incidence) : std::vector<float>{};
+
+  std::vector<Beam> beams;
+  beams.reserve(n);
   for (size_t i = 0; i < n; ++i) {
     const float r = scan.ranges_m[i], a = scan.angles_rad[i];
     // The scan's max range itself is the "no return" reading of many scanners.
     if (!std::isfinite(r) || !std::isfinite(a) || r < range_min || r >= range_max) continue;
-    ends_base.push_back(scan.sensor_mount * Eigen::Vector2d(r * std::cos(a), r * std::sin(a)));
+    Beam& b = beams.emplace_back(Beam{scan.sensor_mount * Eigen::Vector2d(r * std::cos(a), r * std::sin(a)), r});
+    if (use_intensity) {
+      b.intensity = scan.intensities[i];
+      b.cos_incidence = cos_incidence[i];
+      if (calibration)
+        b.reflectivity = static_cast<float>(calibration->reflectivity(b.intensity, r, b.cos_incidence));
+    }
   }
   std::vector<MatchPoint> points;
-  points.reserve(ends_base.size());
+  points.reserve(beams.size());
   const double spacing2 = options_.match_point_spacing_m * options_.match_point_spacing_m;
-  for (const Eigen::Vector2d& p : ends_base)
-    if (points.empty() || (p - points.back().p_m).squaredNorm() >= spacing2) points.push_back({p});
+  for (const Beam& b : beams)
+    if (points.empty() || (b.end_m - points.back().p_m).squaredNorm() >= spacing2)
+      points.push_back({b.end_m, b.reflectivity});
 
   // --- Predict, match, update.
   const auto found = trajectories_.find(trajectory);
@@ -117,12 +180,23 @@ Pose2 Slam2d::addScan(const std::string& trajectory, const LaserScan& scan, cons
   const Pose2 moved = between(track.last_update_pose, estimate);
   const bool update = is_new || map_.empty() || moved.translation().norm() >= options_.map_update_distance_m ||
                       std::abs(moved.theta_rad) >= options_.map_update_angle_rad;
-  if (update && !ends_base.empty()) {
+  if (update && !beams.empty()) {
     const Pose2 sensor = estimate * scan.sensor_mount;
     std::vector<Ray> rays;
-    rays.reserve(ends_base.size());
-    for (const Eigen::Vector2d& p : ends_base) rays.push_back({estimate * p, true});
+    rays.reserve(beams.size());
+    for (const Beam& b : beams) rays.push_back({estimate * b.end_m, true});
     map_.insert(sensor.translation(), rays, options_.occupancy, range_max);
+    if (calibration) {
+      for (size_t i = 0; i < beams.size(); ++i)
+        if (std::isfinite(beams[i].reflectivity)) map_.addReflectivity(rays[i].end_m, beams[i].reflectivity);
+    } else if (sampling && use_intensity) {
+      ScannerModel& model = models_[scan.model];
+      if (!model.sampler) model.sampler.emplace(options_.calibration_sample);
+      for (size_t i = 0; i < beams.size(); ++i)
+        model.sampler->add(cellId(map_.cellOf(rays[i].end_m)), beams[i].range_m, beams[i].cos_incidence,
+                           beams[i].intensity);
+      maybeSelfCalibrate(model);
+    }
     track.last_update_pose = estimate;
     ++version_;
   }

@@ -1,0 +1,39 @@
+#include "slam2d/chunked_grid.h"
+
+#include <gtest/gtest.h>
+
+namespace rmap::slam2d {
+namespace {
+
+TEST(ChunkedGrid, ReadsNothingBeforeAWrite) {
+  ChunkedGrid<int> grid;
+  EXPECT_EQ(grid.find(0, 0), nullptr);
+  EXPECT_EQ(grid.find(-100000, 7), nullptr);
+  EXPECT_EQ(grid.chunkCount(), 0u);
+}
+
+TEST(ChunkedGrid, GrowsInEveryDirectionAndKeepsCellsInPlace) {
+  ChunkedGrid<int> grid;
+  grid.at(0, 0) = 1;
+  int* first = &grid.at(0, 0);
+  // Far in all four directions and the diagonals, negative indices included.
+  const int far = 1 << 20;
+  const int xs[] = {far, -far, 0, 0, far, -far, 63, 64, -1, -64, -65};
+  const int ys[] = {0, 0, far, -far, -far, far, 63, 64, -1, -64, -65};
+  for (int k = 0; k < 11; ++k) grid.at(xs[k], ys[k]) = k + 10;
+  // Many chunks force rehashing; earlier cells must survive it.
+  for (int k = 0; k < 500; ++k) grid.at(k * 64, -k * 64) += 1;
+  EXPECT_EQ(&grid.at(0, 0), first);
+  EXPECT_EQ(*grid.find(0, 0), 2);  // 1, then +1 from k = 0
+  for (int k = 1; k < 11; ++k) EXPECT_EQ(*grid.find(xs[k], ys[k]), k + 10) << k;
+  EXPECT_EQ(*grid.find(64 * 499, -64 * 499), 1);
+  // Neighbours of written cells in the same chunk exist and are default; other chunks do not.
+  ASSERT_NE(grid.find(1, 1), nullptr);
+  EXPECT_EQ(*grid.find(1, 1), 0);
+  EXPECT_EQ(grid.find(far / 2, far / 2), nullptr);
+  // -1 and -64 share chunk -1; -65 is in chunk -2.
+  EXPECT_NE(grid.find(-33, -33), nullptr);
+}
+
+}  // namespace
+}  // namespace rmap::slam2d

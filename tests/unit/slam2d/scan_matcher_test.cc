@@ -1,0 +1,103 @@
+#include "slam2d/scan_matcher.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include "sim_scans.h"
+
+namespace rmap::slam2d {
+namespace {
+
+/// Endpoints of a scan in the base frame (identity mount), finite beams only.
+std::vector<MatchPoint> endpoints(const LaserScan& scan) {
+  std::vector<MatchPoint> points;
+  for (size_t i = 0; i < scan.ranges_m.size(); ++i)
+    if (std::isfinite(scan.ranges_m[i]) && scan.ranges_m[i] < scan.range_max_m)
+      points.push_back({{scan.ranges_m[i] * std::cos(scan.angles_rad[i]), scan.ranges_m[i] * std::sin(scan.angles_rad[i])}});
+  return points;
+}
+
+void insertAt(GridMap2d& map, const Pose2& pose, const std::vector<MatchPoint>& points) {
+  std::vector<Ray> rays;
+  for (const MatchPoint& p : points) rays.push_back({pose * p.p_m, true});
+  map.insert(pose.translation(), rays, OccupancyUpdate{}, 100.0);
+}
+
+class SimulatedRoom : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() { world_ = new sim::VoxelWorld(testing::simBuilding()); }
+  static void TearDownTestSuite() { delete world_; }
+  static sim::VoxelWorld* world_;
+};
+sim::VoxelWorld* SimulatedRoom::world_ = nullptr;
+
+TEST_F(SimulatedRoom, RecoversAKnownOffset) {
+  const Pose2 truth = testing::simTour(*world_, 1, 0.3).front();
+  std::mt19937_64 rng(11);
+  const sim::Laser2dModel model = sim::Laser2dModel::sickLike();
+  GridMap2d map(0.05, 3);
+  // Three scans into the map, then a fresh scan (new noise) to match.
+  for (int k = 0; k < 3; ++k) insertAt(map, truth, endpoints(testing::simScan(*world_, truth, model, rng)));
+  const std::vector<MatchPoint> scan = endpoints(testing::simScan(*world_, truth, model, rng));
+  ASSERT_GT(scan.size(), 100u);
+  const Pose2 offsets[] = {{0.15, -0.10, 0.05}, {-0.2, 0.05, -0.08}, {0.0, 0.25, 0.0}};
+  for (const Pose2& offset : offsets) {
+    const Pose2 start = truth * offset;
+    const MatchResult r = matchScan(map, scan, start, std::nullopt, ScanMatcherOptions{});
+    EXPECT_NEAR(r.pose.x_m, truth.x_m, 0.02) << offset.x_m << " " << offset.y_m;
+    EXPECT_NEAR(r.pose.y_m, truth.y_m, 0.02);
+    EXPECT_NEAR(normalizeAngle(r.pose.theta_rad - truth.theta_rad), 0.0, 0.005);
+    EXPECT_LT(r.mean_residual, 0.5);
+    EXPECT_GT(r.hessian.trace(), 0.0);
+  }
+}
+
+TEST(ScanMatcher, ACorridorLeavesItsAxisAtTheInitialGuess) {
+  // Two long walls through the cell centres at y = ±1.025 m: x is unobservable.
+  GridMap2d map(0.05, 3);
+  std::vector<MatchPoint> walls;
+  for (double x = -8.0; x <= 8.0; x += 0.05) {
+    walls.push_back({{x, 1.025}});
+    walls.push_back({{x, -1.025}});
+  }
+  for (int k = 0; k < 3; ++k) insertAt(map, Pose2{}, walls);
+  std::vector<MatchPoint> scan;
+  for (double x = -4.0; x <= 4.0; x += 0.05) {
+    scan.push_back({{x, 0.955}});  // the robot stands 7 cm off the centre line
+    scan.push_back({{x, -1.095}});
+  }
+  const Pose2 start{0.3, 0.0, 0.0};
+  const MatchResult r = matchScan(map, scan, start, std::nullopt, ScanMatcherOptions{});
+  EXPECT_NEAR(r.pose.y_m, 0.07, 0.01);
+  EXPECT_NEAR(r.pose.theta_rad, 0.0, 0.005);
+  EXPECT_NEAR(r.pose.x_m, start.x_m, 0.05) << "the corridor axis must not run away";
+  // The Hessian says so: x has (almost) no information.
+  EXPECT_LT(r.hessian(0, 0), 1e-2 * r.hessian(1, 1));
+  // A prior on the axis holds it where the prior says.
+  const PosePrior prior{{0.2, 0.0, 0.0}, {50.0, 0.0, 0.0}};
+  EXPECT_NEAR(matchScan(map, scan, start, prior, ScanMatcherOptions{}).pose.x_m, 0.2, 0.02);
+}
+
+TEST(ScanMatcher, ReturnsTheInitialGuessWithNothingToMatch) {
+  GridMap2d empty(0.05, 3);
+  const std::vector<MatchPoint> scan{{{1.0, 0.0}}, {{0.0, 1.0}}};
+  const Pose2 start{1.0, 2.0, 0.3};
+  Pose2 r = matchScan(empty, scan, start, std::nullopt, ScanMatcherOptions{}).pose;
+  EXPECT_EQ(r.x_m, start.x_m);
+  EXPECT_EQ(r.theta_rad, start.theta_rad);
+  GridMap2d map(0.05, 3);
+  insertAt(map, Pose2{}, scan);
+  // Endpoints far from anything mapped: no gradient, no step.
+  const std::vector<MatchPoint> far{{{100.0, 0.0}}};
+  r = matchScan(map, far, start, std::nullopt, ScanMatcherOptions{}).pose;
+  EXPECT_TRUE(r.isFinite());
+  EXPECT_NEAR(r.x_m, start.x_m, 1e-12);
+  EXPECT_NEAR(r.y_m, start.y_m, 1e-12);
+  EXPECT_TRUE(matchScan(map, {}, start, std::nullopt, ScanMatcherOptions{}).pose.isFinite());
+}
+
+}  // namespace
+}  // namespace rmap::slam2d

@@ -1,0 +1,199 @@
+#include "slam2d/slam2d.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <random>
+#include <vector>
+
+#include "sim_scans.h"
+
+namespace rmap::slam2d {
+namespace {
+
+class SimulatedTour : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    world_ = new sim::VoxelWorld(testing::simBuilding());
+    tour_ = new std::vector<Pose2>(testing::simTour(*world_, 160, 0.25));
+  }
+  static void TearDownTestSuite() {
+    delete world_;
+    delete tour_;
+  }
+
+  /// Odometry of the tour: truth increments with a drifting error (2 % of the
+  /// distance, 1° per metre of heading), starting at the first true pose.
+  static std::vector<Pose2> odometry(uint64_t seed) {
+    std::mt19937_64 rng(seed);
+    std::normal_distribution<double> unit(0.0, 1.0);
+    std::vector<Pose2> odo{tour_->front()};
+    for (size_t k = 1; k < tour_->size(); ++k) {
+      Pose2 d = between((*tour_)[k - 1], (*tour_)[k]);
+      const double len = d.translation().norm();
+      d.x_m *= 1.02;
+      d.theta_rad += 0.0175 * len + 0.005 * unit(rng);
+      odo.push_back(odo.back() * d);
+    }
+    return odo;
+  }
+
+  static sim::VoxelWorld* world_;
+  static std::vector<Pose2>* tour_;
+};
+sim::VoxelWorld* SimulatedTour::world_ = nullptr;
+std::vector<Pose2>* SimulatedTour::tour_ = nullptr;
+
+TEST_F(SimulatedTour, TracksTheRobotWithDriftingOdometry) {
+  const std::vector<Pose2> odo = odometry(5);
+  std::mt19937_64 rng(21);
+  const sim::Laser2dModel model = sim::Laser2dModel::sickLike();
+  Slam2d slam;
+  double worst_m = 0.0, worst_odo_m = 0.0;
+  for (size_t k = 0; k < tour_->size(); ++k) {
+    const Pose2 est = slam.addScan("robot", testing::simScan(*world_, (*tour_)[k], model, rng, int64_t(k) * 100'000'000), odo[k]);
+    worst_m = std::max(worst_m, (est.translation() - (*tour_)[k].translation()).norm());
+    worst_odo_m = std::max(worst_odo_m, (odo[k].translation() - (*tour_)[k].translation()).norm());
+    EXPECT_LT(std::abs(normalizeAngle(est.theta_rad - (*tour_)[k].theta_rad)), 0.02) << k;
+  }
+  EXPECT_LT(worst_m, 0.08);
+  EXPECT_GT(worst_odo_m, 0.3) << "the odometry must be bad enough to need the matcher";
+  EXPECT_GT(slam.version(), 20u);
+  const Eigen::AlignedBox2i known = slam.grid().knownCells();
+  EXPECT_GT(known.sizes().minCoeff(), 100);
+  // The cell at the robot's start is free, a wall cell it saw is occupied.
+  EXPECT_LT(slam.grid().probability(slam.grid().cellOf(tour_->front().translation())), 0.3f);
+}
+
+TEST_F(SimulatedTour, TracksWithoutOdometry) {
+  std::mt19937_64 rng(22);
+  const sim::Laser2dModel model = sim::Laser2dModel::hokuyoLike();
+  Slam2d slam;
+  // Without odometry the trajectory starts at the origin: compare in the first pose's frame.
+  const std::vector<Pose2> tour = testing::smoothTurns(std::vector<Pose2>(tour_->begin(), tour_->begin() + 80), 0.15);
+  const Pose2 start = tour.front();
+  double worst_m = 0.0;
+  for (const Pose2& pose : tour) {
+    const Pose2 est = slam.addScan("robot", testing::simScan(*world_, pose, model, rng), std::nullopt);
+    const Pose2 truth = between(start, pose);
+    worst_m = std::max(worst_m, (est.translation() - truth.translation()).norm());
+  }
+  EXPECT_LT(worst_m, 0.1);
+}
+
+TEST_F(SimulatedTour, TwoRobotsShareOneMap) {
+  std::mt19937_64 rng(23);
+  const sim::Laser2dModel model = sim::Laser2dModel::sickLike();
+  Slam2d slam;
+  for (size_t k = 0; k < 60; ++k) slam.addScan("a", testing::simScan(*world_, (*tour_)[k], model, rng), (*tour_)[k]);
+  const uint64_t version_before = slam.version();
+  // Robot b joins at a pose robot a passed, its odometry 12 cm and 3° off in the map frame.
+  const Pose2 b_truth = (*tour_)[30];
+  const Pose2 b_odo = b_truth * Pose2{0.1, -0.07, 0.05};
+  slam.addScan("b", testing::simScan(*world_, b_truth, model, rng), b_odo);
+  const Pose2 est = slam.addScan("b", testing::simScan(*world_, b_truth, model, rng), b_odo);
+  EXPECT_LT((est.translation() - b_truth.translation()).norm(), 0.05);  // the map itself is within a few cm
+  EXPECT_LT(std::abs(normalizeAngle(est.theta_rad - b_truth.theta_rad)), 0.01);
+  EXPECT_GT(slam.version(), version_before);
+  ASSERT_TRUE(slam.pose("a").has_value());
+  EXPECT_NEAR(slam.pose("a")->x_m, (*tour_)[59].x_m, 0.05);
+  EXPECT_FALSE(slam.pose("c").has_value());
+}
+
+TEST_F(SimulatedTour, SelfCalibratesAndFusesReflectivity) {
+  std::mt19937_64 rng(24);
+  const sim::Laser2dModel model = sim::Laser2dModel::hokuyoLike();
+  Slam2d slam;
+  // Truth per cell: the reflectivity of the surfaces its returns hit.
+  std::map<std::pair<int, int>, std::pair<double, int>> truth;
+  for (size_t k = 0; k < tour_->size(); ++k) {
+    const sim::Laser2dScan s = sim::simulateLaser2d(*world_, testing::sensorAt((*tour_)[k]), model, rng);
+    slam.addScan("robot", testing::toLaserScan(s), (*tour_)[k]);
+    for (size_t i = 0; i < s.ranges_m.size(); ++i) {
+      if (!std::isfinite(s.ranges_m[i]) || s.reflectivities[i] <= 0.0f) continue;
+      const float a = s.angle_min_rad + i * s.angle_increment_rad;
+      const Eigen::Vector2i c = slam.grid().cellOf((*tour_)[k] * Eigen::Vector2d(s.ranges_m[i] * std::cos(a), s.ranges_m[i] * std::sin(a)));
+      auto& t = truth[{c.x(), c.y()}];
+      t.first += s.reflectivities[i], ++t.second;
+    }
+  }
+  ASSERT_NE(slam.calibration(model.name), nullptr) << "the tour should be enough to self-calibrate";
+  // Self-calibration fixes the scale by normalisation; the fused values must
+  // follow the true reflectivity up to that scale: correlation over cells.
+  double sx = 0, sy = 0, sxx = 0, syy = 0, sxy = 0;
+  int n = 0;
+  for (const auto& [cell, t] : truth) {
+    const ReflectivityCell r = slam.grid().reflectivity({cell.first, cell.second});
+    if (r.count < 3) continue;
+    const double x = t.first / t.second, y = r.mean;
+    sx += x, sy += y, sxx += x * x, syy += y * y, sxy += x * y, ++n;
+  }
+  ASSERT_GT(n, 300);
+  const double corr = (sxy - sx * sy / n) / std::sqrt((sxx - sx * sx / n) * (syy - sy * sy / n));
+  EXPECT_GT(corr, 0.8);
+}
+
+LaserScan tinyScan() {
+  LaserScan s;
+  s.model = "test";
+  s.range_max_m = 10.0f;
+  for (int i = 0; i < 90; ++i) {
+    s.angles_rad.push_back(-1.5f + 0.033f * i);
+    s.ranges_m.push_back(2.0f + 0.01f * i);
+  }
+  return s;
+}
+
+TEST(Slam2d, RejectsBadScansAndKeepsItsState) {
+  Slam2d slam;
+  slam.addScan("r", tinyScan(), Pose2{1.0, 2.0, 0.5});
+  const uint64_t version = slam.version();
+  const Pose2 pose = *slam.pose("r");
+
+  LaserScan mismatch = tinyScan();
+  mismatch.angles_rad.pop_back();
+  LaserScan bad_intensities = tinyScan();
+  bad_intensities.intensities.assign(3, 1.0f);
+  LaserScan all_nan = tinyScan();
+  std::fill(all_nan.ranges_m.begin(), all_nan.ranges_m.end(), std::nanf(""));
+  LaserScan empty;
+  LaserScan bad_mount = tinyScan();
+  bad_mount.sensor_mount.theta_rad = INFINITY;
+  for (const LaserScan* s : {&mismatch, &bad_intensities, &all_nan, &empty, &bad_mount}) {
+    EXPECT_THROW(slam.addScan("r", *s, Pose2{1.1, 2.0, 0.5}), std::invalid_argument);
+    EXPECT_THROW(slam.addScan("new", *s, std::nullopt), std::invalid_argument);
+  }
+  EXPECT_THROW(slam.addScan("r", tinyScan(), Pose2{NAN, 0.0, 0.0}), std::invalid_argument);
+  EXPECT_THROW(slam.addScan("r", tinyScan(), Pose2{1e9, 0.0, 0.0}), std::invalid_argument);
+  EXPECT_EQ(slam.version(), version);
+  EXPECT_EQ(slam.pose("r")->x_m, pose.x_m);
+  EXPECT_EQ(slam.pose("r")->theta_rad, pose.theta_rad);
+  EXPECT_FALSE(slam.pose("new").has_value());
+
+  // Some NaN beams among good ones are just skipped; out-of-limit readings too.
+  LaserScan partial = tinyScan();
+  for (size_t i = 0; i < partial.ranges_m.size(); i += 3) partial.ranges_m[i] = std::nanf("");
+  partial.ranges_m[1] = 1e6f;
+  EXPECT_TRUE(slam.addScan("r", partial, Pose2{1.0, 2.0, 0.5}).isFinite());
+  // A scan whose finite readings are all beyond the limits predicts only.
+  LaserScan far = tinyScan();
+  std::fill(far.ranges_m.begin(), far.ranges_m.end(), 50.0f);
+  EXPECT_TRUE(slam.addScan("r", far, Pose2{1.2, 2.0, 0.5}).isFinite());
+}
+
+TEST(Slam2d, RejectsBadOptions) {
+  Slam2dOptions o;
+  o.levels = 0;
+  EXPECT_THROW(Slam2d{o}, std::invalid_argument);
+  o = {};
+  o.range_max_m = o.range_min_m;
+  EXPECT_THROW(Slam2d{o}, std::invalid_argument);
+  o = {};
+  o.occupancy.hit_log_odds = -1.0f;
+  EXPECT_THROW(Slam2d{o}, std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace rmap::slam2d
