@@ -56,7 +56,7 @@ MapWorker::MapWorker(std::string name, std::unique_ptr<map3d::CuboidMap> map, in
       store_(store),
       metrics_(metrics),
       pose_sink_(std::move(pose_sink)),
-      slam2d_(metrics),
+      slam2d_(slam2d.calibrations, metrics),
       sensors_(slam2d.sensors),
       estimate_sink_(std::move(slam2d.estimate_sink)),
       slam_first_input_id_(slam2d.first_input_id),

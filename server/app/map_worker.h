@@ -49,6 +49,7 @@ class MapWorker {
 
   /// What the 2D SLAM of a map needs from the service.
   struct Slam2dInputs {
+    const Calibrations& calibrations;
     const RobotSensors& sensors;
     EstimateSink estimate_sink;
     /// Log id of the first message that fed this map's SLAM (kSlam2dInputEvent), 0 when none yet.

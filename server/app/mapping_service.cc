@@ -81,7 +81,8 @@ const char* MappingService::version() { return RMAP_VERSION; }
 
 MappingService::MappingService(Config config)
     : config_(std::move(config)),
-      viewers_(metrics_, config_.limits.viewer_send_queue_bytes) {
+      viewers_(metrics_, config_.limits.viewer_send_queue_bytes),
+      calibrations_(loadCalibrations(config_.slam2d)) {
   store_ = store::Store::open(config_.data_dir);
   loadSlam2dEvents();
   // Event ids are never reused, so the id of this start's event exceeds every earlier epoch.
@@ -151,7 +152,7 @@ std::shared_ptr<MapWorker> MappingService::makeWorker(const store::MapRecord& re
   }
   const auto first_input = slam_first_input_.find(record.name);
   MapWorker::Slam2dInputs slam2d{
-      sensors_,
+      calibrations_, sensors_,
       [this](const std::string& robot_id, const v1::PoseEstimate& estimate) { sendEstimate(robot_id, estimate); },
       first_input == slam_first_input_.end() ? 0 : first_input->second};
   auto worker = std::make_shared<MapWorker>(record.name, std::move(map), applied_id, config_, *store_, metrics_,

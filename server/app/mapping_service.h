@@ -117,6 +117,7 @@ class MappingService {
   std::unique_ptr<store::Store> store_;
   int64_t epoch_ = 0;
   ViewerHub viewers_;
+  Calibrations calibrations_;
   RobotSensors sensors_;
   std::mutex declare_mutex_;                        ///< one declareLasers at a time: check, store, record
   std::map<std::string, int64_t> slam_first_input_;  ///< per map, from the store's events at start

@@ -5,7 +5,9 @@
 #include <Eigen/Geometry>
 #include <chrono>
 #include <cmath>
+#include <fstream>
 #include <limits>
+#include <sstream>
 
 #include "app/ingest.h"
 
@@ -44,7 +46,26 @@ slam2d::Pose2 planar(const Eigen::Isometry3d& pose) {
 
 }  // namespace
 
-Slam2dLayer::Slam2dLayer(Metrics& metrics) : metrics_(metrics) {}
+Calibrations loadCalibrations(const Slam2dConfig& config) {
+  Calibrations out;
+  for (const auto& [model, file] : config.calibration_files) {
+    const std::string what = "slam2d.calibrations: model '" + model + "', file " + file.string();
+    std::ifstream in(file, std::ios::binary);
+    if (!in) throw std::invalid_argument(what + ": cannot be read");
+    std::ostringstream text;
+    text << in.rdbuf();
+    try {
+      out.emplace(model, slam2d::IntensityCalibration::fromText(text.str()));
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument(what + ": " + e.what());
+    }
+  }
+  return out;
+}
+
+Slam2dLayer::Slam2dLayer(const Calibrations& calibrations, Metrics& metrics) : metrics_(metrics) {
+  for (const auto& [model, calibration] : calibrations) slam_.setCalibration(model, calibration);
+}
 
 std::optional<Slam2dResult> Slam2dLayer::addScan(const std::string& robot_id, const v1::LaserScan2D& in,
                                                  const std::optional<Laser2dSetup>& laser) {

@@ -11,13 +11,22 @@
 #include <shared_mutex>
 #include <string>
 
+#include "app/config.h"
 #include "app/layer_tiles.h"
 #include "app/metrics.h"
 #include "app/robot_sensors.h"
 #include "rmap/v1/robot_stream.pb.h"
+#include "slam2d/intensity_calibration.h"
 #include "slam2d/slam2d.h"
 
 namespace rmap::app {
+
+/// Intensity calibration per scanner model.
+using Calibrations = std::map<std::string, slam2d::IntensityCalibration>;
+
+/// Reads and parses the configured calibration files.
+/// @throws std::invalid_argument naming the model, the file and what is wrong
+Calibrations loadCalibrations(const Slam2dConfig& config);
 
 /// One scan put through the SLAM.
 struct Slam2dResult {
@@ -28,7 +37,8 @@ struct Slam2dResult {
 
 class Slam2dLayer {
  public:
-  explicit Slam2dLayer(Metrics& metrics);
+  /// @param calibrations  per scanner model; other models are self-calibrated by the SLAM
+  Slam2dLayer(const Calibrations& calibrations, Metrics& metrics);
 
   /// Processes a scan of `robot_id` taken with `laser` (identity mount and no
   /// model when the robot declared none). Odometry: the scan's own, else the
