@@ -7,11 +7,21 @@
 import assert from 'node:assert/strict';
 import { after, before, describe, test } from 'node:test';
 
-import { artifactPath, getJson, launchBrowser, log, nonBackgroundFraction, openViewerPage, startRmapd, waitFor }
-  from './lib/harness.mjs';
+import { artifactPath, getJson, launchBrowser, log, openViewerPage, startRmapd, waitFor } from './lib/harness.mjs';
+import { VIEWER_BACKGROUND, decodePng, foregroundStats } from './lib/png.mjs';
 
 let server;
 let browser;
+
+/** Fraction of the viewer's canvas that is not background, from a screenshot. */
+async function drawnFraction(page, file) {
+  const rect = await page.evaluate(() => {
+    const r = document.querySelector('canvas.map-canvas').getBoundingClientRect();
+    return { x: r.left, y: r.top, width: r.width, height: r.height };
+  });
+  const shot = await page.screenshot({ path: artifactPath(file) });
+  return foregroundStats(decodePng(shot), VIEWER_BACKGROUND, { rect }).fraction;
+}
 
 /** Runs in the page: streams `scans` scans of a 8 m × 6 m room to map `map`; resolves to the acks. */
 async function streamRoom({ map, scans }) {
@@ -107,7 +117,7 @@ describe('2D layers in the viewer', { timeout: 120000 }, () => {
     await waitFor('the map', () => page.evaluate(() => window.rmapViewer.map() === 'room'), { timeout: 20000 });
     await waitFor('cuboids drawn', () => page.evaluate(() => window.rmapViewer.cuboidCount() > 0), { timeout: 30000 });
     await page.waitForTimeout(500);
-    const without = await nonBackgroundFraction(page);
+    const without = await drawnFraction(page, 'viewer-layers-off.png');
 
     await page.check('#show-layers');
     await waitFor('occupancy tiles', () => page.evaluate(() => {
@@ -116,8 +126,7 @@ describe('2D layers in the viewer', { timeout: 120000 }, () => {
     }), { timeout: 20000 });
     assert.equal(await page.isHidden('#layers-empty'), true);
     await page.waitForTimeout(500);
-    const withOccupancy = await nonBackgroundFraction(page);
-    await page.screenshot({ path: artifactPath('viewer-layers-occupancy.png') });
+    const withOccupancy = await drawnFraction(page, 'viewer-layers-occupancy.png');
     log(`non-background: ${without.toFixed(4)} without the layer, ${withOccupancy.toFixed(4)} with occupancy`);
     // The room's free floor is drawn where the 3D view shows only the planar cloud of walls.
     assert.ok(withOccupancy > without + 0.01, `${withOccupancy} vs ${without}`);
@@ -127,7 +136,11 @@ describe('2D layers in the viewer', { timeout: 120000 }, () => {
       const l = window.rmapViewer.layers();
       return l.tiles.length > 0 && l.tiles.every((k) => k.startsWith('reflectivity/'));
     }), { timeout: 20000 });
-    await page.screenshot({ path: artifactPath('viewer-layers-reflectivity.png') });
+    await page.waitForTimeout(500);
+    const withReflectivity = await drawnFraction(page, 'viewer-layers-reflectivity.png');
+    log(`non-background with reflectivity: ${withReflectivity.toFixed(4)}`);
+    // Reflectivity exists only where beams ended (the walls): far less than the occupancy's floor.
+    assert.ok(withReflectivity < withOccupancy - 0.1, `${withReflectivity} vs ${withOccupancy}`);
 
     await page.uncheck('#show-layers');
     await waitFor('layers removed', () => page.evaluate(() => window.rmapViewer.layers().tiles.length === 0));

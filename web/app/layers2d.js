@@ -14,6 +14,7 @@ export class Layers2D {
     this.layer = 'occupancy';
     this.info = null;
     this.tiles = new Map(); // "layer/z/x/y" → {etag, image, bounds}
+    this.shown = []; // keys of the tiles the renderer draws
     this.generation = 0;
   }
 
@@ -29,7 +30,12 @@ export class Layers2D {
     this.generation++;
     this.tiles.clear();
     this.info = null;
-    this.renderer.setLayerTiles([]);
+    this.showTiles([]);
+  }
+
+  showTiles(list) {
+    this.renderer.setLayerTiles(list);
+    this.shown = list.map((t) => t.key);
   }
 
   hide() {
@@ -48,7 +54,7 @@ export class Layers2D {
     } catch (e) {
       if (generation !== this.generation) return;
       this.info = null;
-      this.renderer.setLayerTiles([]);
+      this.showTiles([]);
       this.onState(e.status === 404 ? 'none' : 'error', e);
       return;
     }
@@ -63,7 +69,7 @@ export class Layers2D {
     if (generation !== this.generation) return;
     const keys = new Set(wanted.map((t) => `${this.layer}/${t.z}/${t.x}/${t.y}`));
     for (const key of [...this.tiles.keys()]) if (!keys.has(key)) this.tiles.delete(key);
-    this.renderer.setLayerTiles([...this.tiles.values()].filter((t) => t.image));
+    this.showTiles([...this.tiles.values()].filter((t) => t.image));
     this.onState('shown', info);
   }
 

@@ -831,7 +831,7 @@ window.rmapViewer = Object.freeze({
   query: (x, y, z) => api.json(occupancyUrl(x, y, z)),
   timings: () => ({ ...state.timings }),
   layers: () => ({ available: state.layersAvailable, version: state.layersVersion ?? null,
-    tiles: [...layers.tiles.keys()] }),
+    tiles: [...layers.shown] }),
   frameStats: (n) => renderer.frameStats(n),
   frames: () => renderer.frames,
   errors: () => [...state.errors],
