@@ -5,6 +5,7 @@
 
 #include "map3d/map3d_bench.h"
 #include "server/server_bench.h"
+#include "slam2d/slam2d_bench.h"
 
 int main(int argc, char** argv) {
   CLI::App app{"rmap-bench: rmap against its anchors (OctoMap, ...) in one process; prints ratios, writes JSON"};
@@ -51,10 +52,36 @@ int main(int argc, char** argv) {
   s->add_option("--insert-threads", server.insert_threads, "threads tracing one cloud")->check(CLI::Range(1, 64));
   s->add_option("--json", server.json_out, "write results as JSON to this file");
 
+  rmap::bench::Slam2dBenchOptions slam2d;
+  CLI::App* d = app.add_subcommand("slam2d", "2D laser SLAM on a CARMEN log or a simulated run: relation error, ATE, RPE, speed");
+  d->add_option("--log", slam2d.source, "CARMEN log (.gz/.bz2 ok) or sim:building")->required();
+  d->add_option("--relations", slam2d.relations_path, "Kümmerle et al. relation file (t1 t2 x y z roll pitch yaw)");
+  d->add_option("--json", slam2d.json_out, "write results as JSON to this file");
+  d->add_option("--poses", slam2d.poses_out, "write the estimated laser poses (stamp_s x y theta) to this file");
+  d->add_option("--odometry", slam2d.odometry,
+                "odometry given to the SLAM: auto (raw log: logged poses; corrected log: ODOM increments; "
+                "no ODOM lines: none), logged, odom-increments, none")
+      ->check(CLI::IsMember({"auto", "logged", "odom-increments", "none"}));
+  d->add_flag_callback("--no-odometry", [&] { slam2d.odometry = "none"; }, "same as --odometry none");
+  d->add_option("--max-scans", slam2d.max_scans, "only the first N scans (0: all)");
+  d->add_option("--rpe-distance", slam2d.rpe_distance_m, "travel of the RPE pairs, metres")->check(CLI::PositiveNumber);
+  d->add_option("--sim-laser", slam2d.sim.laser, "simulated 2D laser preset")->check(CLI::IsMember({"sick", "hokuyo"}));
+  d->add_option("--sim-poses", slam2d.sim.poses, "simulated path poses (0.1 m apart)")->check(CLI::Range(2, 1000000));
+  d->add_option("--sim-seed", slam2d.sim.seed, "simulation seed (building and noise)");
+  d->add_option("--resolution", slam2d.slam.resolution_m, "finest cell edge, metres")->check(CLI::PositiveNumber);
+  d->add_option("--levels", slam2d.slam.levels, "map pyramid levels")->check(CLI::Range(1, 8));
+  d->add_option("--map-update-distance", slam2d.slam.map_update_distance_m, "metres moved between map updates");
+  d->add_option("--map-update-angle", slam2d.slam.map_update_angle_rad, "radians turned between map updates");
+  d->add_option("--range-max", slam2d.slam.range_max_m, "beams beyond are ignored, metres")->check(CLI::PositiveNumber);
+  d->add_option("--odometry-information-xy", slam2d.slam.odometry_information_xy, "odometry prior weight, 1/m^2");
+  d->add_option("--odometry-information-theta", slam2d.slam.odometry_information_theta, "odometry prior weight, 1/rad^2");
+  d->add_option("--reflectivity-weight", slam2d.slam.reflectivity_weight, "weight of the reflectivity residual");
+
   CLI11_PARSE(app, argc, argv);
   try {
     if (m->parsed()) return rmap::bench::runMap3dBench(map3d);
     if (s->parsed()) return rmap::bench::runServerBench(server);
+    if (d->parsed()) return rmap::bench::runSlam2dBench(slam2d);
   } catch (const std::exception& e) {
     std::cerr << "rmap-bench: " << e.what() << std::endl;
     return 1;

@@ -1,7 +1,9 @@
 #include "slam2d/scan_matcher.h"
 
 #include <Eigen/Cholesky>
+#include <algorithm>
 #include <cmath>
+#include <vector>
 
 namespace rmap::slam2d {
 
@@ -50,6 +52,42 @@ Normal accumulate(const GridMap2d& map, int level, std::span<const MatchPoint> p
   return n;
 }
 
+/// The best of a small grid of poses around `initial` by Σ M on the coarsest
+/// level; another pose must beat the guess by 2 % to replace it, so flat
+/// scores (corridor, open space) keep the guess.
+Pose2 correlativeSearch(const GridMap2d& map, std::span<const MatchPoint> points, const Pose2& initial,
+                        const ScanMatcherOptions& options) {
+  const OccupancyGrid& grid = map.level(map.levelCount() - 1);
+  const size_t stride = std::max<size_t>(1, points.size() / static_cast<size_t>(std::max(1, options.search_points)));
+  const int steps = static_cast<int>(std::floor(options.search_rad / options.search_step_rad));
+  const double d = grid.resolution_m();
+  const int reach = static_cast<int>(std::floor(options.search_m / d));
+  std::vector<Eigen::Vector2d> shifts;
+  for (int i = -reach; i <= reach; ++i)
+    for (int j = -reach; j <= reach; ++j) shifts.emplace_back(i * d, j * d);
+  auto score = [&](double theta, const Eigen::Vector2d& t) {
+    const double c = std::cos(theta), s = std::sin(theta);
+    double sum = 0.0;
+    for (size_t i = 0; i < points.size(); i += stride) {
+      const Eigen::Vector2d& p = points[i].p_m;
+      sum += grid.sample({c * p.x() - s * p.y() + t.x(), s * p.x() + c * p.y() + t.y()}).value;
+    }
+    return sum;
+  };
+  Pose2 best = initial;
+  double best_score = 1.02 * score(initial.theta_rad, initial.translation());
+  for (int k = -steps; k <= steps; ++k) {
+    const double theta = initial.theta_rad + k * options.search_step_rad;
+    for (const Eigen::Vector2d& shift : shifts) {
+      if (k == 0 && shift.isZero()) continue;
+      const Eigen::Vector2d t = initial.translation() + shift;
+      const double sc = score(theta, t);
+      if (sc > best_score) best_score = sc, best = {t.x(), t.y(), normalizeAngle(theta)};
+    }
+  }
+  return best;
+}
+
 }  // namespace
 
 MatchResult matchScan(const GridMap2d& map, std::span<const MatchPoint> points, const Pose2& initial,
@@ -57,7 +95,9 @@ MatchResult matchScan(const GridMap2d& map, std::span<const MatchPoint> points, 
   MatchResult result;
   result.pose = initial;
   if (points.empty() || map.empty()) return result;
-  Pose2 xi = initial;
+  Pose2 xi = options.search_rad > 0.0 && options.search_step_rad > 0.0
+                 ? correlativeSearch(map, points, initial, options)
+                 : initial;
   for (int level = map.levelCount() - 1; level >= 0; --level) {
     const int iterations = level == 0 ? options.fine_iterations : options.coarse_iterations;
     const double max_step_m = options.max_step_cells * map.level(level).resolution_m();

@@ -29,6 +29,15 @@ struct ScanMatcherOptions {
   double converged_m = 1e-4;          ///< stop a level when a step is below this translation (m) ...
   double converged_rad = 1e-4;        ///< ... and this rotation (rad)
   double reflectivity_weight = 0.0;   ///< per-point weight of the reflectivity residual (0 = off)
+  /// Correlative search before Gauss–Newton, for a poor initial guess (no
+  /// odometry): headings within ±search_rad of the guess in steps of
+  /// search_step_rad, times translations within ±search_m in steps of the
+  /// coarsest cell, scored by Σ M on the coarsest level over at most
+  /// search_points points. search_rad = 0: off.
+  double search_rad = 0.0;
+  double search_m = 0.0;
+  double search_step_rad = 0.025;
+  int search_points = 60;
 };
 
 /// One endpoint in the robot base frame (m), with its calibrated reflectivity (NaN = none).

@@ -48,6 +48,10 @@ void Slam2dOptions::validate() const {
               std::isfinite(odometry_information_xy) && std::isfinite(odometry_information_theta),
           "odometry information must be finite and ≥ 0");
   require(reflectivity_weight >= 0.0 && std::isfinite(reflectivity_weight), "reflectivity_weight must be ≥ 0");
+  require(search_without_odometry_rad >= 0.0 && search_without_odometry_rad <= 3.2 &&
+              search_without_odometry_m >= 0.0 && search_without_odometry_m <= 5.0,
+          "search_without_odometry_rad must be in [0, 3.2] and search_without_odometry_m in [0, 5]");
+  require(search_odometry_step_m >= 0.0 && search_odometry_step_rad >= 0.0, "search odometry step thresholds must be ≥ 0");
   require(match_point_spacing_m >= 0.0 && std::isfinite(match_point_spacing_m), "match_point_spacing_m must be ≥ 0");
   require(occupancy.hit_log_odds > 0.0f && occupancy.miss_log_odds < 0.0f &&
               occupancy.min_log_odds < 0.0f && occupancy.max_log_odds > 0.0f,
@@ -169,7 +173,14 @@ Pose2 Slam2d::addScan(const std::string& trajectory, const LaserScan& scan, cons
     if (odometry_step)
       prior = PosePrior{predicted, {options_.odometry_information_xy, options_.odometry_information_xy,
                                     options_.odometry_information_theta}};
-    estimate = matchScan(map_, points, predicted, prior, options_.matcher).pose;
+    ScanMatcherOptions matcher = options_.matcher;
+    const Pose2 step = odometry_step ? between(*track.odometry, *odometry) : Pose2{};
+    if (!odometry_step || step.translation().norm() > options_.search_odometry_step_m ||
+        std::abs(step.theta_rad) > options_.search_odometry_step_rad) {
+      matcher.search_rad = options_.search_without_odometry_rad;
+      matcher.search_m = options_.search_without_odometry_m;
+    }
+    estimate = matchScan(map_, points, predicted, prior, matcher).pose;
   } else if (is_new && !points.empty() && !map_.empty()) {
     // A robot joining a shared map starts where its odometry says, then locks on.
     estimate = matchScan(map_, points, predicted, std::nullopt, options_.matcher).pose;

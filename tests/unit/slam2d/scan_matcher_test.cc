@@ -55,6 +55,25 @@ TEST_F(SimulatedRoom, RecoversAKnownOffset) {
   }
 }
 
+TEST_F(SimulatedRoom, TheCorrelativeSearchCatchesALargeTurn) {
+  const Pose2 truth = testing::simTour(*world_, 1, 0.3).front();
+  std::mt19937_64 rng(12);
+  const sim::Laser2dModel model = sim::Laser2dModel::sickLike();
+  GridMap2d map(0.05, 3);
+  insertAt(map, truth, endpoints(testing::simScan(*world_, truth, model, rng)));
+  const std::vector<MatchPoint> scan = endpoints(testing::simScan(*world_, truth, model, rng));
+  const Pose2 start = truth * Pose2{0.25, -0.2, 0.6};
+  ScanMatcherOptions options;
+  const Pose2 plain = matchScan(map, scan, start, std::nullopt, options).pose;
+  EXPECT_GT(std::abs(normalizeAngle(plain.theta_rad - truth.theta_rad)), 0.1) << "Gauss–Newton alone cannot turn this far";
+  options.search_rad = 0.8;
+  options.search_m = 0.4;
+  const Pose2 searched = matchScan(map, scan, start, std::nullopt, options).pose;
+  EXPECT_NEAR(searched.x_m, truth.x_m, 0.02);
+  EXPECT_NEAR(searched.y_m, truth.y_m, 0.02);
+  EXPECT_NEAR(normalizeAngle(searched.theta_rad - truth.theta_rad), 0.0, 0.005);
+}
+
 TEST(ScanMatcher, ACorridorLeavesItsAxisAtTheInitialGuess) {
   // Two long walls through the cell centres at y = ±1.025 m: x is unobservable.
   GridMap2d map(0.05, 3);

@@ -1,0 +1,28 @@
+#pragma once
+/// @file slam2d_bench.h
+/// `rmap-bench slam2d`: runs the 2D SLAM on a CARMEN log or a simulated run
+/// and scores it (relation error, ATE, RPE, speed; reflectivity on simulation).
+
+#include <string>
+
+#include "slam2d/slam2d.h"
+#include "slam2d/slam2d_dataset.h"
+
+namespace rmap::bench {
+
+struct Slam2dBenchOptions {
+  std::string source;          ///< see loadSlam2dDataset
+  std::string relations_path;  ///< Kümmerle relation file, or empty
+  std::string odometry = "auto";  ///< auto | logged | odom-increments | none (see OdometrySource)
+  std::string json_out;        ///< empty: no file
+  std::string poses_out;       ///< empty: no file; else one line "stamp_s x y theta" per scan (estimated laser pose)
+  size_t max_scans = 0;        ///< 0: all; else only the first ones (quick runs)
+  double rpe_distance_m = 1.0;
+  Slam2dSimOptions sim;
+  slam2d::Slam2dOptions slam;  ///< the engine's defaults unless set on the command line
+};
+
+/// Runs, prints a summary, writes JSON. @return process exit code
+int runSlam2dBench(const Slam2dBenchOptions& options);
+
+}  // namespace rmap::bench

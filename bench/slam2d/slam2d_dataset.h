@@ -1,0 +1,81 @@
+#pragma once
+/// @file slam2d_dataset.h
+/// Inputs of `rmap-bench slam2d`: a CARMEN log or a simulated run, split into
+/// what the SLAM may see (scans, stamps, odometry) and what only scoring may
+/// see (reference poses, relations, simulated truth).
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "datasets/slam_relations.h"
+#include "slam2d/laser_scan.h"
+#include "slam2d/pose2.h"
+
+namespace rmap::bench {
+
+/// Where the odometry given to the SLAM comes from.
+/// - kAuto: a log whose ODOM lines restart at every scan (a corrected log)
+///   gives the increments derived from them (odometryFromOdomIncrements);
+///   a log with ODOM lines that run on (a raw log) gives its logged robot
+///   poses, which are then raw odometry; a log without ODOM lines cannot
+///   tell raw from corrected poses and gives none.
+/// - kLogged: the robot poses of the scan lines (raw logs only: in a
+///   corrected log they are the reference).
+/// - kOdomIncrements, kNone: as named.
+enum class OdometrySource { kAuto, kLogged, kOdomIncrements, kNone };
+
+struct Slam2dSimOptions {
+  std::string laser = "sick";  ///< sick | hokuyo (sim::Laser2dModel presets)
+  int poses = 600;             ///< path poses planned through the building (0.1 m apart)
+  uint64_t seed = 1;
+};
+
+/// What the SLAM sees: one scan and the odometry at its stamp.
+struct Slam2dInput {
+  slam2d::LaserScan scan;
+  std::optional<slam2d::Pose2> odometry;  ///< robot base pose in the odometry frame
+};
+
+/// A simulated beam return with its ground truth, for the reflectivity figures.
+struct SimReturn {
+  uint32_t scan = 0;        ///< index into inputs
+  uint32_t beam = 0;
+  float true_reflectivity = 0.0f;
+};
+
+struct Slam2dDataset {
+  std::string name;
+  std::vector<Slam2dInput> inputs;
+  /// Reference sensor (laser) poses, one per input: the log's logged laser
+  /// poses (corrected or raw odometry, see reference_kind) or the simulated truth.
+  std::vector<slam2d::Pose2> reference;
+  std::string reference_kind;  ///< "corrected poses of the log", "raw odometry of the log", "simulation truth"
+  std::string odometry_kind;   ///< what inputs[].odometry holds
+  std::vector<datasets::SlamRelation> relations;  ///< empty when none
+  bool simulated = false;
+  std::vector<SimReturn> sim_returns;  ///< simulated runs only: every return that hit a surface
+  /// Seconds the data spans (scan stamps, max − min), absent when the stamps
+  /// do not measure time (all equal, or a gap of over 10 min between
+  /// consecutive sorted stamps, as in logs whose stamps were rounded or garbled).
+  std::optional<double> duration_s;
+  size_t skipped_lines = 0;  ///< log lines of other messages
+};
+
+/// Loads SOURCE: a CARMEN log (plain, .gz, .bz2) or `sim:building` (a
+/// procedural one-storey building of clients/sim, a 2D laser preset driven
+/// along a planned tour, truth known; the robot turns on the spot at corners,
+/// ≤ 5° per scan, and its odometry is the true motion with 1 % scale bias and
+/// random errors).
+/// @param relations_path  Kümmerle relation file for scoring, or empty
+/// @throws std::runtime_error naming the source when it cannot be read, or
+///         for an odometry source the log cannot give
+Slam2dDataset loadSlam2dDataset(const std::string& source, const std::string& relations_path, OdometrySource odometry,
+                                const Slam2dSimOptions& sim);
+
+/// Parses "auto", "logged", "odom-increments", "none".
+/// @throws std::invalid_argument otherwise
+OdometrySource parseOdometrySource(const std::string& name);
+
+}  // namespace rmap::bench
