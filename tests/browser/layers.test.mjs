@@ -125,22 +125,25 @@ describe('2D layers in the viewer', { timeout: 120000 }, () => {
       return l.available && l.tiles.length > 0 && l.tiles.every((k) => k.startsWith('occupancy/'));
     }), { timeout: 20000 });
     assert.equal(await page.isHidden('#layers-empty'), true);
-    await page.waitForTimeout(500);
-    const withOccupancy = await drawnFraction(page, 'viewer-layers-occupancy.png');
-    log(`non-background: ${without.toFixed(4)} without the layer, ${withOccupancy.toFixed(4)} with occupancy`);
     // The room's free floor is drawn where the 3D view shows only the planar cloud of walls.
-    assert.ok(withOccupancy > without + 0.01, `${withOccupancy} vs ${without}`);
+    const withOccupancy = await waitFor('the occupancy view drawn', async () => {
+      const f = await drawnFraction(page, 'viewer-layers-occupancy.png');
+      return f > without + 0.1 && f;
+    }, { timeout: 15000, interval: 500 });
+    log(`non-background: ${without.toFixed(4)} without the layer, ${withOccupancy.toFixed(4)} with occupancy`);
 
     await page.selectOption('#layer-select', 'reflectivity');
     await waitFor('reflectivity tiles', () => page.evaluate(() => {
       const l = window.rmapViewer.layers();
       return l.tiles.length > 0 && l.tiles.every((k) => k.startsWith('reflectivity/'));
     }), { timeout: 20000 });
-    await page.waitForTimeout(500);
-    const withReflectivity = await drawnFraction(page, 'viewer-layers-reflectivity.png');
-    log(`non-background with reflectivity: ${withReflectivity.toFixed(4)}`);
     // Reflectivity exists only where beams ended (the walls): far less than the occupancy's floor.
-    assert.ok(withReflectivity < withOccupancy - 0.1, `${withReflectivity} vs ${withOccupancy}`);
+    // Polled: a software-WebGL frame can take a while to reach the canvas.
+    const withReflectivity = await waitFor('the reflectivity view drawn', async () => {
+      const f = await drawnFraction(page, 'viewer-layers-reflectivity.png');
+      return f < withOccupancy - 0.1 && f;
+    }, { timeout: 15000, interval: 500 });
+    log(`non-background with reflectivity: ${withReflectivity.toFixed(4)}`);
 
     await page.uncheck('#show-layers');
     await waitFor('layers removed', () => page.evaluate(() => window.rmapViewer.layers().tiles.length === 0));

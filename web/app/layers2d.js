@@ -59,7 +59,9 @@ export class Layers2D {
       return;
     }
     if (generation !== this.generation) return;
+    const unchanged = this.info && this.info.epoch === info.epoch && this.info.version === info.version;
     this.info = info;
+    if (unchanged && this.shown.length > 0) return; // same grid: the tiles drawn are current
     if (!info.known_bounds) {
       this.onState('none');
       return;
