@@ -6,6 +6,7 @@
 #include "map3d/map3d_bench.h"
 #include "server/server_bench.h"
 #include "slam2d/slam2d_bench.h"
+#include "slam2d/calibration_eval.h"
 
 int main(int argc, char** argv) {
   CLI::App app{"rmap-bench: rmap against its anchors (OctoMap, ...) in one process; prints ratios, writes JSON"};
@@ -56,6 +57,10 @@ int main(int argc, char** argv) {
   CLI::App* d = app.add_subcommand("slam2d", "2D laser SLAM on a CARMEN log or a simulated run: relation error, ATE, RPE, speed");
   d->add_option("--log", slam2d.source, "CARMEN log (.gz/.bz2 ok) or sim:building")->required();
   d->add_option("--relations", slam2d.relations_path, "Kümmerle et al. relation file (t1 t2 x y z roll pitch yaw)");
+  d->add_option("--reference", slam2d.reference_path,
+                "CARMEN log whose scan poses at the same stamps are the reference for ATE/RPE (default: the log's own)");
+  d->add_option("--stamps-from", slam2d.stamps_path,
+                "CARMEN log holding the same scans with the stamps the relations use (a corrected log's raw log)");
   d->add_option("--json", slam2d.json_out, "write results as JSON to this file");
   d->add_option("--poses", slam2d.poses_out, "write the estimated laser poses (stamp_s x y theta) to this file");
   d->add_option("--odometry", slam2d.odometry,
@@ -76,12 +81,20 @@ int main(int argc, char** argv) {
   d->add_option("--odometry-information-xy", slam2d.slam.odometry_information_xy, "odometry prior weight, 1/m^2");
   d->add_option("--odometry-information-theta", slam2d.slam.odometry_information_theta, "odometry prior weight, 1/rad^2");
   d->add_option("--reflectivity-weight", slam2d.slam.reflectivity_weight, "weight of the reflectivity residual");
+  rmap::bench::CalibrationEvalOptions calib;
+  calib.lidar_pair_dir = std::string(RMAP_SHARED_DATA_DIR) + "/lidar-intensity/small-gicp-pair";
+  CLI::App* c = app.add_subcommand("calib", "2D laser intensity calibration on both simulated scanners, real lidar check");
+  c->add_option("--poses", calib.poses, "scans per simulated run")->check(CLI::Range(1, 100000));
+  c->add_option("--seed", calib.seed, "building and tour of the calibration run (the test run: seed + 1)");
+  c->add_option("--lidar-pair", calib.lidar_pair_dir, "folder with source.ply, target.ply, T_target_source.txt ('' skips)");
+  c->add_option("--json", calib.json_out, "write results as JSON to this file");
 
   CLI11_PARSE(app, argc, argv);
   try {
     if (m->parsed()) return rmap::bench::runMap3dBench(map3d);
     if (s->parsed()) return rmap::bench::runServerBench(server);
     if (d->parsed()) return rmap::bench::runSlam2dBench(slam2d);
+    if (c->parsed()) return rmap::bench::runCalibrationBench(calib);
   } catch (const std::exception& e) {
     std::cerr << "rmap-bench: " << e.what() << std::endl;
     return 1;

@@ -102,14 +102,37 @@ void writePoses(const std::string& path, const std::vector<Slam2dInput>& inputs,
   }
 }
 
+/// The poses of `estimate` and `reference` where the reference is known.
+struct Paired {
+  std::vector<Pose2> estimate, reference;
+  std::vector<StampedPose2> stamped_reference;
+};
+
+Paired paired(const std::vector<Slam2dInput>& inputs, const std::vector<Pose2>& estimate,
+              const std::vector<std::optional<Pose2>>& reference) {
+  Paired p;
+  for (size_t i = 0; i < estimate.size(); ++i) {
+    if (!reference[i]) continue;
+    p.estimate.push_back(estimate[i]);
+    p.reference.push_back(*reference[i]);
+    p.stamped_reference.push_back({inputs[i].scan.stamp_ns, *reference[i]});
+  }
+  return p;
+}
+
 double orNan(const std::optional<double>& v) { return v.value_or(std::numeric_limits<double>::quiet_NaN()); }
 
 }  // namespace
 
 int runSlam2dBench(const Slam2dBenchOptions& options) {
   std::cout << "loading " << options.source << " ..." << std::endl;
-  Slam2dDataset data =
-      loadSlam2dDataset(options.source, options.relations_path, parseOdometrySource(options.odometry), options.sim);
+  Slam2dSourceOptions source;
+  source.relations_path = options.relations_path;
+  source.reference_path = options.reference_path;
+  source.stamps_path = options.stamps_path;
+  source.odometry = parseOdometrySource(options.odometry);
+  source.sim = options.sim;
+  Slam2dDataset data = loadSlam2dDataset(options.source, source);
   if (options.max_scans > 0 && data.inputs.size() > options.max_scans) {
     data.inputs.resize(options.max_scans);
     data.reference.resize(options.max_scans);
@@ -126,8 +149,9 @@ int runSlam2dBench(const Slam2dBenchOptions& options) {
   const SlamRun run = runSlam(slam, data.inputs);
 
   const RelationErrors rel = relationErrors(stamped(data.inputs, run.laser_poses), data.relations);
-  const ErrorStats ate = absoluteTrajectoryError(run.laser_poses, data.reference);
-  const RelativePoseErrors rpe = relativePoseError(run.laser_poses, data.reference, options.rpe_distance_m);
+  const Paired scored = paired(data.inputs, run.laser_poses, data.reference);
+  const ErrorStats ate = absoluteTrajectoryError(scored.estimate, scored.reference);
+  const RelativePoseErrors rpe = relativePoseError(scored.estimate, scored.reference, options.rpe_distance_m);
   // NaN (null in the JSON) when the log's stamps do not measure time.
   const double realtime = orNan(data.duration_s) / run.wall_s;
 
@@ -140,6 +164,10 @@ int runSlam2dBench(const Slam2dBenchOptions& options) {
             {"poses_outside_map", run.outside_map},
             {"odometry", data.odometry_kind},
             {"reference", data.reference_kind},
+            {"reference_file", options.reference_path},
+            {"reference_poses", scored.reference.size()},
+            {"stamps_file", options.stamps_path},
+            {"stamps_replaced", data.stamps_replaced},
             {"relations_file", options.relations_path},
             {"relations_total", data.relations.size()},
             {"relations_used", rel.relations_used},
@@ -155,6 +183,8 @@ int runSlam2dBench(const Slam2dBenchOptions& options) {
             {"wall_s", run.wall_s},
             {"realtime_factor", realtime},
             {"cpu_s", run.cpu_s},
+            // wall time suffers from other processes on a shared machine; CPU time much less
+            {"realtime_factor_cpu", orNan(data.duration_s) / run.cpu_s},
             {"map", {{"resolution_m", slam.grid().resolution_m()},
                      {"known_cells", {slam.grid().knownCells().sizes().x(), slam.grid().knownCells().sizes().y()}},
                      {"updates", slam.version()}}},
@@ -163,7 +193,7 @@ int runSlam2dBench(const Slam2dBenchOptions& options) {
   if (!run.first_rejection.empty()) r["first_rejection"] = run.first_rejection;
   // Baseline: the same relations scored on the reference trajectory (raw
   // odometry in a raw log, the correcting SLAM's poses in a corrected log).
-  const RelationErrors ref_rel = relationErrors(stamped(data.inputs, data.reference), data.relations);
+  const RelationErrors ref_rel = relationErrors(scored.stamped_reference, data.relations);
   r["reference_rel_trans_err_m"] = statsJson(ref_rel.translation_m);
   r["reference_rel_rot_err_deg"] = statsJson(ref_rel.rotation_rad, kDegPerRad);
   // Baseline: the odometry the SLAM was given, scored like its output.
@@ -171,9 +201,11 @@ int runSlam2dBench(const Slam2dBenchOptions& options) {
     std::vector<Pose2> odometry;
     for (const Slam2dInput& in : data.inputs) odometry.push_back(in.odometry.value_or(Pose2{}) * in.scan.sensor_mount);
     const RelationErrors odo_rel = relationErrors(stamped(data.inputs, odometry), data.relations);
-    r["odometry_baseline"] = {{"rel_trans_err_m", statsJson(odo_rel.translation_m)},
-                              {"ate_m", absoluteTrajectoryError(odometry, data.reference).rmse},
-                              {"rpe_1m_m", relativePoseError(odometry, data.reference, options.rpe_distance_m).translation_m.rmse}};
+    const Paired odo = paired(data.inputs, odometry, data.reference);
+    r["odometry_baseline"] = {
+        {"rel_trans_err_m", statsJson(odo_rel.translation_m)},
+        {"ate_m", absoluteTrajectoryError(odo.estimate, odo.reference).rmse},
+        {"rpe_1m_m", relativePoseError(odo.estimate, odo.reference, options.rpe_distance_m).translation_m.rmse}};
     std::printf("odometry alone: ATE %.4f m, RPE %.4f m, relations %.4f m\n", r["odometry_baseline"]["ate_m"].get<double>(),
                 r["odometry_baseline"]["rpe_1m_m"].get<double>(), odo_rel.translation_m.mean);
   }

@@ -13,6 +13,8 @@ namespace rmap::bench {
 struct Slam2dBenchOptions {
   std::string source;          ///< see loadSlam2dDataset
   std::string relations_path;  ///< Kümmerle relation file, or empty
+  std::string reference_path;  ///< CARMEN log of reference poses at the same stamps, or empty (see Slam2dSourceOptions)
+  std::string stamps_path;     ///< CARMEN log to take the scans' stamps from, or empty (see Slam2dSourceOptions)
   std::string odometry = "auto";  ///< auto | logged | odom-increments | none (see OdometrySource)
   std::string json_out;        ///< empty: no file
   std::string poses_out;       ///< empty: no file; else one line "stamp_s x y theta" per scan (estimated laser pose)

@@ -3,9 +3,11 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <limits>
 #include <numbers>
 #include <random>
 #include <stdexcept>
+#include <unordered_map>
 
 #include "datasets/carmen_log.h"
 #include "sim/building.h"
@@ -159,6 +161,67 @@ Slam2dDataset simulateBuilding(const Slam2dSimOptions& o) {
   return data;
 }
 
+/// The ranges of a scan to the millimetre; readings at or beyond `cut` (and
+/// non-finite ones) alike, so two logs whose no-return ranges differ agree.
+std::vector<int32_t> rangeKey(const slam2d::LaserScan& scan, float cut) {
+  std::vector<int32_t> key(scan.ranges_m.size());
+  for (size_t i = 0; i < key.size(); ++i) {
+    const float r = scan.ranges_m[i];
+    key[i] = std::isfinite(r) && r < cut ? int32_t(std::lround(double(r) * 1000.0)) : -1;
+  }
+  return key;
+}
+
+struct RangeKeyHash {
+  size_t operator()(const std::vector<int32_t>& key) const {
+    uint64_t h = 1469598103934665603ull;  // FNV-1a over the values
+    for (int32_t v : key) h = (h ^ uint32_t(v)) * 1099511628211ull;
+    return size_t(h);
+  }
+};
+
+/// Gives each scan found (by its ranges) in the log at `path` that log's
+/// stamp; scans that appear there more than once (a robot standing still)
+/// keep theirs.
+void takeStampsFrom(Slam2dDataset& data, const std::string& path) {
+  const datasets::CarmenLog log = datasets::readCarmenLog(path);
+  float cut = std::numeric_limits<float>::infinity();
+  for (const datasets::CarmenScan& s : log.scans) cut = std::min(cut, s.scan.range_max_m);
+  for (const Slam2dInput& in : data.inputs) cut = std::min(cut, in.scan.range_max_m);
+  constexpr int64_t kAmbiguous = std::numeric_limits<int64_t>::min();
+  std::unordered_map<std::vector<int32_t>, int64_t, RangeKeyHash> stamps;
+  for (const datasets::CarmenScan& s : log.scans) {
+    const auto [it, inserted] = stamps.emplace(rangeKey(s.scan, cut), s.scan.stamp_ns);
+    if (!inserted) it->second = kAmbiguous;
+  }
+  for (Slam2dInput& in : data.inputs) {
+    const auto it = stamps.find(rangeKey(in.scan, cut));
+    if (it == stamps.end() || it->second == kAmbiguous) continue;
+    in.scan.stamp_ns = it->second;
+    ++data.stamps_replaced;
+  }
+  if (data.stamps_replaced == 0) throw std::runtime_error(path + ": holds none of the log's scans, no stamps to take");
+  std::vector<int64_t> all;
+  for (const Slam2dInput& in : data.inputs) all.push_back(in.scan.stamp_ns);
+  data.duration_s = spanOfStamps(std::move(all));
+}
+
+/// Replaces the reference with the laser poses of `path` at equal stamps.
+void useReferenceLog(Slam2dDataset& data, const std::string& path) {
+  const datasets::CarmenLog log = datasets::readCarmenLog(path);
+  std::unordered_map<int64_t, Pose2> poses;
+  for (const datasets::CarmenScan& s : log.scans) poses.emplace(s.scan.stamp_ns, s.laser_pose);
+  size_t matched = 0;
+  for (size_t k = 0; k < data.inputs.size(); ++k) {
+    const auto it = poses.find(data.inputs[k].scan.stamp_ns);
+    data.reference[k] = it == poses.end() ? std::nullopt : std::optional<Pose2>(it->second);
+    matched += it != poses.end();
+  }
+  if (matched == 0) throw std::runtime_error(path + ": no scan stamp in common with the log, cannot be its reference");
+  data.reference_kind = "poses of " + std::filesystem::path(path).filename().string() + " at " +
+                        std::to_string(matched) + " shared stamps";
+}
+
 }  // namespace
 
 OdometrySource parseOdometrySource(const std::string& name) {
@@ -169,12 +232,11 @@ OdometrySource parseOdometrySource(const std::string& name) {
   throw std::invalid_argument("odometry source must be auto, logged, odom-increments or none, not \"" + name + "\"");
 }
 
-Slam2dDataset loadSlam2dDataset(const std::string& source, const std::string& relations_path, OdometrySource odometry,
-                                const Slam2dSimOptions& sim) {
+Slam2dDataset loadSlam2dDataset(const std::string& source, const Slam2dSourceOptions& options) {
   Slam2dDataset data;
   if (source == "sim:building") {
-    data = simulateBuilding(sim);
-    if (odometry == OdometrySource::kNone) {
+    data = simulateBuilding(options.sim);
+    if (options.odometry == OdometrySource::kNone) {
       for (Slam2dInput& in : data.inputs) in.odometry.reset();
       data.odometry_kind = "none";
     }
@@ -182,9 +244,11 @@ Slam2dDataset loadSlam2dDataset(const std::string& source, const std::string& re
     throw std::runtime_error("unknown simulated source " + source + " (sim:building)");
   } else {
     if (!std::filesystem::exists(source)) throw std::runtime_error(source + ": no such file");
-    data = fromLog(source, odometry);
+    data = fromLog(source, options.odometry);
   }
-  if (!relations_path.empty()) data.relations = datasets::readSlamRelations(relations_path);
+  if (!options.stamps_path.empty()) takeStampsFrom(data, options.stamps_path);
+  if (!options.reference_path.empty()) useReferenceLog(data, options.reference_path);
+  if (!options.relations_path.empty()) data.relations = datasets::readSlamRelations(options.relations_path);
   return data;
 }
 

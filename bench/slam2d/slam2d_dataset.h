@@ -49,9 +49,11 @@ struct Slam2dDataset {
   std::string name;
   std::vector<Slam2dInput> inputs;
   /// Reference sensor (laser) poses, one per input: the log's logged laser
-  /// poses (corrected or raw odometry, see reference_kind) or the simulated truth.
-  std::vector<slam2d::Pose2> reference;
-  std::string reference_kind;  ///< "corrected poses of the log", "raw odometry of the log", "simulation truth"
+  /// poses (corrected or raw odometry, see reference_kind), those of a
+  /// reference log at the same stamps (absent for stamps it lacks), or the
+  /// simulated truth.
+  std::vector<std::optional<slam2d::Pose2>> reference;
+  std::string reference_kind;  ///< e.g. "corrected poses of the log", "raw odometry of the log", "simulation truth"
   std::string odometry_kind;   ///< what inputs[].odometry holds
   std::vector<datasets::SlamRelation> relations;  ///< empty when none
   bool simulated = false;
@@ -61,6 +63,22 @@ struct Slam2dDataset {
   /// consecutive sorted stamps, as in logs whose stamps were rounded or garbled).
   std::optional<double> duration_s;
   size_t skipped_lines = 0;  ///< log lines of other messages
+  size_t stamps_replaced = 0;  ///< scans that took their stamp from Slam2dSourceOptions::stamps_path
+};
+
+struct Slam2dSourceOptions {
+  std::string relations_path;  ///< Kümmerle relation file for scoring, or empty
+  /// A CARMEN log whose scan (laser) poses are the reference for the scans
+  /// of the source with the same stamps, e.g. a corrected subset of a raw
+  /// log; empty: the source's own logged poses.
+  std::string reference_path;
+  /// A CARMEN log holding the same scans (same ranges to the millimetre)
+  /// with the stamps the relations use: each scan found there once takes its
+  /// stamp. Corrected logs keep only some scans of a raw log and rewrote
+  /// their stamps; this finds them in the raw log. Empty: none.
+  std::string stamps_path;
+  OdometrySource odometry = OdometrySource::kAuto;
+  Slam2dSimOptions sim;
 };
 
 /// Loads SOURCE: a CARMEN log (plain, .gz, .bz2) or `sim:building` (a
@@ -68,11 +86,10 @@ struct Slam2dDataset {
 /// along a planned tour, truth known; the robot turns on the spot at corners,
 /// ≤ 5° per scan, and its odometry is the true motion with 1 % scale bias and
 /// random errors).
-/// @param relations_path  Kümmerle relation file for scoring, or empty
-/// @throws std::runtime_error naming the source when it cannot be read, or
-///         for an odometry source the log cannot give
-Slam2dDataset loadSlam2dDataset(const std::string& source, const std::string& relations_path, OdometrySource odometry,
-                                const Slam2dSimOptions& sim);
+/// @throws std::runtime_error naming the file when it cannot be read, for an
+///         odometry source the log cannot give, or for a reference log that
+///         shares no stamp with the source
+Slam2dDataset loadSlam2dDataset(const std::string& source, const Slam2dSourceOptions& options);
 
 /// Parses "auto", "logged", "odom-increments", "none".
 /// @throws std::invalid_argument otherwise

@@ -24,9 +24,9 @@ struct LogReading {
 };
 
 /// Turns a reading into log space; false when it cannot enter a fit.
-bool toLogReading(uint32_t patch, double range_m, double cos_incidence, double intensity, double saturation,
-                  double max_incidence_deg, LogReading& out) {
-  if (!(range_m > 0.0) || !std::isfinite(range_m) || !(intensity > 0.0) || !(intensity < saturation)) return false;
+bool toLogReading(uint32_t patch, double range_m, double cos_incidence, double intensity, double max_incidence_deg,
+                  LogReading& out) {
+  if (!(range_m > 0.0) || !std::isfinite(range_m) || !(intensity > 0.0) || !std::isfinite(intensity)) return false;
   if (!(cos_incidence > 0.0 && cos_incidence <= 1.0 + 1e-6)) return false;
   const double alpha = std::acos(std::min(1.0, cos_incidence)) * (180.0 / std::numbers::pi);
   if (alpha > max_incidence_deg) return false;
@@ -48,10 +48,6 @@ void validate(const CalibrationFitOptions& o) {
   if (!(o.min_response_fraction >= 0.0 && o.min_response_fraction < 1.0)) fail("min_response_fraction must be in [0, 1)");
 }
 
-double saturationLevel(const CalibrationFitOptions& o, const std::vector<float>& intensities) {
-  return std::isnan(o.saturation) ? detectSaturation(intensities) : o.saturation;
-}
-
 double median(std::vector<double> v) {
   auto mid = v.begin() + v.size() / 2;
   std::nth_element(v.begin(), mid, v.end());
@@ -61,6 +57,7 @@ double median(std::vector<double> v) {
 struct LogModelFit {
   IntensityCalibration calibration;
   std::vector<double> log_reflectivity;  ///< per patch: known, estimated, or NaN without readings
+  double sigma = 0.0;                    ///< robust scale of the log residuals (≈ relative noise)
 };
 
 /// Second-difference penalty λ·DᵀD on the coefficient block starting at `offset`.
@@ -114,6 +111,7 @@ LogModelFit fitLogModel(const std::vector<LogReading>& readings, const std::vect
   std::vector<int> touched;
   std::vector<char> is_touched(n, 0);
   std::vector<double> residual(count);
+  double sigma = 0.0;
 
   for (int iteration = 0; iteration <= o.robust_iterations; ++iteration) {
     a.setZero();
@@ -195,7 +193,7 @@ LogModelFit fitLogModel(const std::vector<LogReading>& readings, const std::vect
     }
     std::vector<double> abs_residual(count);
     for (size_t j = 0; j < count; ++j) abs_residual[j] = std::abs(residual[j]);
-    const double sigma = std::max(1e-6, 1.4826 * median(abs_residual));
+    sigma = std::max(1e-6, 1.4826 * median(abs_residual));
     for (size_t j = 0; j < count; ++j) {
       const double z = residual[j] / (2.385 * sigma);  // Cauchy, 95 % efficiency at the normal
       weight[j] = 1.0 / (1.0 + z * z);
@@ -212,14 +210,69 @@ LogModelFit fitLogModel(const std::vector<LogReading>& readings, const std::vect
   }
   const double min_response = o.min_response_fraction * std::exp(max_r + max_a);
   return {IntensityCalibration(std::move(range_spline), std::move(incidence_spline), saturation, min_response),
-          std::move(log_rho)};
+          std::move(log_rho), sigma};
 }
 
-void requireReadings(size_t usable, const CalibrationFitOptions& o, const char* what) {
-  if (usable < o.min_readings) {
-    throw std::invalid_argument(std::string(what) + ": " + std::to_string(usable) + " usable readings, need " +
-                                std::to_string(o.min_readings));
+/// Readings below a saturation level, in patches with at least min_views of them (0: any patch).
+std::vector<LogReading> unsaturated(const std::vector<LogReading>& all, double level, size_t patches, int min_views) {
+  const double log_level = std::log(level);
+  std::vector<int> views(patches, 0);
+  for (const LogReading& r : all) views[r.patch] += r.log_i < log_level;
+  std::vector<LogReading> out;
+  for (const LogReading& r : all) {
+    if (r.log_i < log_level && views[r.patch] >= min_views) out.push_back(r);
   }
+  return out;
+}
+
+/// Fits on the unsaturated readings. A given level is taken as is; a
+/// detected pile (detectSaturation) must also be confirmed by the fit: the
+/// readings above it must fall short of what their patch and g predict (a
+/// clipped reading reads less than the light it got), else a natural crowd
+/// of bright readings, e.g. at the range where g peaks, would be discarded.
+LogModelFit fitUnsaturated(const std::vector<LogReading>& all, const std::vector<double>& known_log_rho, int min_views,
+                           const CalibrationFitOptions& o, const char* what) {
+  double level = o.saturation;
+  bool detected = false;
+  if (std::isnan(level)) {
+    std::vector<float> intensities;
+    intensities.reserve(all.size());
+    for (const LogReading& r : all) intensities.push_back(static_cast<float>(std::exp(r.log_i)));
+    level = detectSaturation(intensities);
+    detected = std::isfinite(level);
+  }
+  auto fit = [&](double saturation) {
+    const std::vector<LogReading> readings = unsaturated(all, saturation, known_log_rho.size(), min_views);
+    if (readings.size() < o.min_readings) {
+      throw std::invalid_argument(std::string(what) + ": " + std::to_string(readings.size()) +
+                                  " usable readings, need " + std::to_string(o.min_readings));
+    }
+    return fitLogModel(readings, known_log_rho, saturation, o);
+  };
+  LogModelFit result = fit(level);
+  if (!detected) return result;
+  // ln(I / predicted) of the readings at or above the level (the pile) and
+  // of those just below it (the control: same selection, same outliers).
+  const double log_level = std::log(level), clearly_short = -std::max(0.05, 3.0 * result.sigma);
+  size_t pile = 0, pile_short = 0, control = 0, control_short = 0;
+  for (const LogReading& r : all) {
+    const double log_rho = result.log_reflectivity[r.patch];
+    if (r.log_i < log_level - 0.3 || !std::isfinite(log_rho)) continue;
+    const bool short_of_g = r.log_i - log_rho - result.calibration.logRange()(r.log_r) -
+                                result.calibration.logIncidence()(r.alpha_deg) < clearly_short;
+    if (r.log_i >= log_level) pile++, pile_short += short_of_g;
+    else control++, control_short += short_of_g;
+  }
+  // Confirmed when at least 5 % of the pile reads clearly (3σ) less than
+  // predicted and three times as often as the control does; fewer than ten
+  // readings in the pile cannot refute it.
+  constexpr size_t kFewest = 10;
+  const double pile_rate = pile ? double(pile_short) / pile : 0.0;
+  const double control_rate = control ? double(control_short) / control : 0.0;
+  if (pile >= kFewest && !(pile_rate >= 0.05 && pile_rate > 3.0 * control_rate)) {
+    result = fit(std::numeric_limits<double>::infinity());
+  }
+  return result;
 }
 
 }  // namespace
@@ -265,37 +318,33 @@ double detectSaturation(const std::vector<float>& intensities) {
   const double sigma = std::max(0.5 * kBin, upper > 0 ? std::sqrt(upper_sq / upper) : 0.0);
   if (sigma > kMaxPileSigma) return kInf;
   const double threshold = center - 3.0 * sigma;
-  size_t in_pile = 0, below = 0;  // the pile's window and an equally wide one just below it
+  // A peak: twice as dense as the readings in an equally wide window just below the pile.
+  size_t in_pile = 0, below = 0;
   for (double l : x) {
     if (l >= threshold) ++in_pile;
     else if (l >= 2.0 * threshold) ++below;
   }
-  const bool pile = in_pile >= std::max<size_t>(20, positive / 1000) && 2 * in_pile > 3 * below;
+  const double peak_density = peak_count / (5.0 * kBin), below_density = below / -threshold;
+  const bool pile = in_pile >= std::max<size_t>(20, positive / 1000) && peak_density > 2.0 * below_density;
   return pile ? max_i * std::exp(threshold) : kInf;
 }
 
 IntensityCalibration fitCalibration(const std::vector<ReflectivityObservation>& observations,
                                     const CalibrationFitOptions& options) {
   validate(options);
-  std::vector<float> intensities;
-  intensities.reserve(observations.size());
-  for (const ReflectivityObservation& o : observations) intensities.push_back(o.intensity);
-  const double saturation = saturationLevel(options, intensities);
-
   std::vector<LogReading> readings;
   std::vector<double> known_log_rho;
   for (const ReflectivityObservation& o : observations) {
     LogReading r;
     if (!(o.reflectivity > 0.0f) || !std::isfinite(o.reflectivity)) continue;
-    if (!toLogReading(static_cast<uint32_t>(readings.size()), o.range_m, o.cos_incidence, o.intensity, saturation,
+    if (!toLogReading(static_cast<uint32_t>(readings.size()), o.range_m, o.cos_incidence, o.intensity,
                       options.max_incidence_deg, r)) {
       continue;
     }
     readings.push_back(r);
     known_log_rho.push_back(std::log(double(o.reflectivity)));
   }
-  requireReadings(readings.size(), options, "fitCalibration");
-  return fitLogModel(readings, known_log_rho, saturation, options).calibration;
+  return fitUnsaturated(readings, known_log_rho, 0, options, "fitCalibration").calibration;
 }
 
 IntensityCalibration selfCalibrate(const std::vector<IntensityObservation>& observations,
@@ -305,29 +354,17 @@ IntensityCalibration selfCalibrate(const std::vector<IntensityObservation>& obse
   if (!(options.median_reflectivity > 0.0) || !std::isfinite(options.median_reflectivity)) {
     throw std::invalid_argument("selfCalibrate: median_reflectivity must be > 0");
   }
-  std::vector<float> intensities;
-  intensities.reserve(observations.size());
-  for (const IntensityObservation& o : observations) intensities.push_back(o.intensity);
-  const double saturation = saturationLevel(options.fit, intensities);
-
   std::unordered_map<uint64_t, uint32_t> patch_of;
-  std::vector<LogReading> all;
+  std::vector<LogReading> readings;
   for (const IntensityObservation& o : observations) {
     const auto [it, added] = patch_of.try_emplace(o.cell_id, static_cast<uint32_t>(patch_of.size()));
     LogReading r;
-    if (toLogReading(it->second, o.range_m, o.cos_incidence, o.intensity, saturation, options.fit.max_incidence_deg, r)) {
-      all.push_back(r);
+    if (toLogReading(it->second, o.range_m, o.cos_incidence, o.intensity, options.fit.max_incidence_deg, r)) {
+      readings.push_back(r);
     }
   }
-  std::vector<int> views(patch_of.size(), 0);
-  for (const LogReading& r : all) ++views[r.patch];
-  std::vector<LogReading> readings;
-  for (const LogReading& r : all) {
-    if (views[r.patch] >= options.min_views_per_cell) readings.push_back(r);
-  }
-  requireReadings(readings.size(), options.fit, "selfCalibrate");
-
-  const LogModelFit fit = fitLogModel(readings, std::vector<double>(patch_of.size(), kNaN), saturation, options.fit);
+  const LogModelFit fit = fitUnsaturated(readings, std::vector<double>(patch_of.size(), kNaN),
+                                         options.min_views_per_cell, options.fit, "selfCalibrate");
   std::vector<double> cell_log_rho;
   for (double l : fit.log_reflectivity) {
     if (std::isfinite(l)) cell_log_rho.push_back(l);

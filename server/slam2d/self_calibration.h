@@ -12,9 +12,10 @@
 /// the response), the splines carry a second-difference penalty (P-splines)
 /// that only matters where data is sparse, and iteratively reweighted least
 /// squares (Cauchy weights on MAD-scaled residuals) discounts cells that mix
-/// two materials and misregistered beams. Saturated readings are detected
-/// from the pile-up of readings at the top of the count range (or given) and
-/// left out.
+/// two materials and misregistered beams. Saturated readings are left out:
+/// above a given level, or above a pile-up of readings at the top of the count
+/// range (detectSaturation) that the fit confirms — the readings in the pile
+/// must fall short of what their cell and g predict, as clipped readings do.
 ///
 /// Self-calibration cannot observe the global scale (ρ·g is all it sees). It
 /// is fixed by normalisation: the median cell reflectivity becomes
@@ -42,7 +43,7 @@ struct CalibrationFitOptions {
   /// Weight of the second-difference penalty relative to the mean weight of
   /// data per coefficient, ≥ 0.
   double smoothness = 0.01;
-  /// Counts at and above which readings are saturated; NaN: detectSaturation.
+  /// Counts at and above which readings are saturated; NaN: detectSaturation, confirmed by the fit.
   double saturation = std::numeric_limits<double>::quiet_NaN();
   /// Reweighting rounds after the least-squares start, ≥ 0.
   int robust_iterations = 5;
@@ -54,8 +55,10 @@ struct CalibrationFitOptions {
 
 /// Saturation level of a scanner from its readings: the saturated ones pile
 /// up in a narrow peak (receiver noise, at most ±15 %) at the top of the
-/// count range, denser than the readings just below it. Readings at or above
-/// the returned level (the peak's lower 3σ edge) are saturated.
+/// count range, twice as dense as the readings just below it. Readings at or
+/// above the returned level (the peak's lower 3σ edge) are saturated. A
+/// crowd of bright unclipped readings can look the same; the fits therefore
+/// keep the level only when the readings above it fall short of g.
 /// @return counts, or +inf when there is no such peak
 double detectSaturation(const std::vector<float>& intensities);
 

@@ -49,8 +49,9 @@ void Slam2dOptions::validate() const {
           "odometry information must be finite and ≥ 0");
   require(reflectivity_weight >= 0.0 && std::isfinite(reflectivity_weight), "reflectivity_weight must be ≥ 0");
   require(search_without_odometry_rad >= 0.0 && search_without_odometry_rad <= 3.2 &&
-              search_without_odometry_m >= 0.0 && search_without_odometry_m <= 5.0,
-          "search_without_odometry_rad must be in [0, 3.2] and search_without_odometry_m in [0, 5]");
+              search_without_odometry_m >= 0.0 && search_without_odometry_m <= 5.0 &&
+              search_after_large_step_m >= 0.0 && search_after_large_step_m <= 5.0,
+          "search_without_odometry_rad must be in [0, 3.2], the search windows in [0, 5] m");
   require(search_odometry_step_m >= 0.0 && search_odometry_step_rad >= 0.0, "search odometry step thresholds must be ≥ 0");
   require(match_point_spacing_m >= 0.0 && std::isfinite(match_point_spacing_m), "match_point_spacing_m must be ≥ 0");
   require(occupancy.hit_log_odds > 0.0f && occupancy.miss_log_odds < 0.0f &&
@@ -178,7 +179,7 @@ Pose2 Slam2d::addScan(const std::string& trajectory, const LaserScan& scan, cons
     if (!odometry_step || step.translation().norm() > options_.search_odometry_step_m ||
         std::abs(step.theta_rad) > options_.search_odometry_step_rad) {
       matcher.search_rad = options_.search_without_odometry_rad;
-      matcher.search_m = options_.search_without_odometry_m;
+      matcher.search_m = odometry_step ? options_.search_after_large_step_m : options_.search_without_odometry_m;
     }
     estimate = matchScan(map_, points, predicted, prior, matcher).pose;
   } else if (is_new && !points.empty() && !map_.empty()) {

@@ -78,29 +78,75 @@ std::string correctedLog() {
 TEST(Slam2dBench, CorrectedLogsGiveOnlyWheelIncrements) {
   const fs::path path = tempPath("corrected.log");
   std::ofstream(path) << correctedLog();
-  const Slam2dDataset d = loadSlam2dDataset(path.string(), "", OdometrySource::kAuto, {});
+  const Slam2dDataset d = loadSlam2dDataset(path.string(), {});
   ASSERT_EQ(d.inputs.size(), 6u);
   EXPECT_EQ(d.reference_kind, "corrected poses of the log");
   EXPECT_EQ(d.odometry_kind, "increments of the ODOM lines");
   for (size_t k = 0; k < 6; ++k) {
     ASSERT_TRUE(d.inputs[k].odometry);
     EXPECT_NEAR(d.inputs[k].odometry->x_m, 0.3 * double(k), 1e-9) << k;  // none of the 0.05 m wobble
-    EXPECT_NEAR(d.reference[k].x_m, 0.3 * k + 0.05 * (k % 2), 1e-9) << k;
+    ASSERT_TRUE(d.reference[k]);
+    EXPECT_NEAR(d.reference[k]->x_m, 0.3 * k + 0.05 * (k % 2), 1e-9) << k;
   }
   EXPECT_NEAR(*d.duration_s, 5.0, 1e-9);
   // The corrected poses are the reference: refusing them as odometry.
-  EXPECT_THROW(loadSlam2dDataset(path.string(), "", OdometrySource::kLogged, {}), std::runtime_error);
-  EXPECT_FALSE(loadSlam2dDataset(path.string(), "", OdometrySource::kNone, {}).inputs[3].odometry);
+  Slam2dSourceOptions o;
+  o.odometry = OdometrySource::kLogged;
+  EXPECT_THROW(loadSlam2dDataset(path.string(), o), std::runtime_error);
+  o.odometry = OdometrySource::kNone;
+  EXPECT_FALSE(loadSlam2dDataset(path.string(), o).inputs[3].odometry);
   fs::remove(path);
 }
 
+TEST(Slam2dBench, ReferenceLogMatchesOnStamps) {
+  const fs::path path = tempPath("raw.log"), reference = tempPath("reference.log");
+  std::ofstream(path) << correctedLog();
+  // the reference holds scans 1 and 4 only, with other poses
+  std::ofstream(reference) << "FLASER 2 1 1 7 8 0.5 7 8 0.5 1.0 h 0\nFLASER 2 1 1 9 8 0.5 9 8 0.5 4.0 h 0\n";
+  Slam2dSourceOptions o;
+  o.reference_path = reference.string();
+  const Slam2dDataset d = loadSlam2dDataset(path.string(), o);
+  ASSERT_EQ(d.reference.size(), 6u);
+  for (size_t k : {0, 2, 3, 5}) EXPECT_FALSE(d.reference[k]) << k;
+  ASSERT_TRUE(d.reference[1] && d.reference[4]);
+  EXPECT_EQ(d.reference[1]->x_m, 7.0);
+  EXPECT_EQ(d.reference[4]->x_m, 9.0);
+  EXPECT_EQ(d.reference_kind, "poses of " + reference.filename().string() + " at 2 shared stamps");
+  std::ofstream(reference) << "FLASER 2 1 1 7 8 0.5 7 8 0.5 11.0 h 0\n";
+  EXPECT_THROW(loadSlam2dDataset(path.string(), o), std::runtime_error);
+  fs::remove(path);
+  fs::remove(reference);
+}
+
+TEST(Slam2dBench, StampsFromTheLogHoldingTheSameScans) {
+  const fs::path path = tempPath("subset.log"), raw = tempPath("raw.log");
+  std::ofstream(path) << "FLASER 3 1 2 3.5 0 0 0 0 0 0 0.5 h 0\nFLASER 3 1 2 4 0 0 0 0 0 0 0.6 h 0\n";
+  // The raw log has the second scan (to the millimetre) and others, under its
+  // own stamps; its largest reading is higher, so 4 is a return there but a
+  // no return in the subset, and must still match.
+  std::ofstream(raw) << "FLASER 3 1 2 3.5 0 0 0 0 0 0 976052857.3 h 0\n"
+                        "FLASER 3 1.0001 2 4 0 0 0 0 0 0 976052857.337284 h 0\n"
+                        "FLASER 3 1 3 5 0 0 0 0 0 0 976052858.0 h 0\n"
+                        "FLASER 3 1 2 3.5 0 0 0 0 0 0 976052859.0 h 0\n";
+  Slam2dSourceOptions o;
+  o.stamps_path = raw.string();
+  const Slam2dDataset d = loadSlam2dDataset(path.string(), o);
+  EXPECT_EQ(d.stamps_replaced, 1u);
+  EXPECT_EQ(d.inputs[0].scan.stamp_ns, 500000000);  // twice in the raw log: ambiguous, kept
+  EXPECT_EQ(d.inputs[1].scan.stamp_ns, 976052857337284000);
+  std::ofstream(raw) << "FLASER 3 9 9 9 0 0 0 0 0 0 1 h 0\n";
+  EXPECT_THROW(loadSlam2dDataset(path.string(), o), std::runtime_error);
+  fs::remove(path);
+  fs::remove(raw);
+}
+
 TEST(Slam2dBench, BadSourcesAreClearErrors) {
-  EXPECT_THROW(loadSlam2dDataset("sim:nowhere", "", OdometrySource::kAuto, {}), std::runtime_error);
-  EXPECT_THROW(loadSlam2dDataset("/nonexistent/log.gz", "", OdometrySource::kAuto, {}), std::runtime_error);
+  EXPECT_THROW(loadSlam2dDataset("sim:nowhere", {}), std::runtime_error);
+  EXPECT_THROW(loadSlam2dDataset("/nonexistent/log.gz", {}), std::runtime_error);
   EXPECT_THROW(parseOdometrySource("wheels"), std::invalid_argument);
-  Slam2dSimOptions sim;
-  sim.laser = "lidar9000";
-  EXPECT_THROW(loadSlam2dDataset("sim:building", "", OdometrySource::kAuto, sim), std::runtime_error);
+  Slam2dSourceOptions o;
+  o.sim.laser = "lidar9000";
+  EXPECT_THROW(loadSlam2dDataset("sim:building", o), std::runtime_error);
 }
 
 }  // namespace

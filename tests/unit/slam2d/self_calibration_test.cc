@@ -158,6 +158,16 @@ TEST(DetectSaturation, FindsTheClippedPileAndNothingElse) {
   EXPECT_TRUE(std::isinf(detectSaturation({})));
 }
 
+TEST(SelfCalibration, BrightReadingsAtThePeakOfTheResponseAreNotSaturation) {
+  // Hokuyo-like g peaks near 1.7 m: surveyed around there without clipping,
+  // the top of the count range is crowded but no reading falls short of g.
+  sim::IntensityModel m = sim::Laser2dModel::hokuyoLike().intensity;
+  m.saturation = 1e9;
+  const Survey map = survey(m, 300, 30, 13, 1.2, 2.5);
+  EXPECT_TRUE(std::isinf(fitCalibration(targets(map)).saturation()));
+  EXPECT_TRUE(std::isinf(selfCalibrate(map.readings).saturation()));
+}
+
 TEST(SelfCalibration, SaturatedReadingsAreLeftOutAndFlagged) {
   sim::IntensityModel m = sim::Laser2dModel::sickLike().intensity;
   const Survey map = survey(m, 300, 30, 11, 0.5, 4.0);  // close: bright cells clip within about 1.3 m

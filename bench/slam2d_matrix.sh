@@ -1,0 +1,83 @@
+#!/usr/bin/env bash
+# Runs `rmap-bench slam2d` on every CARMEN log of ../shared/data/carmen-2d-raw
+# (raw odometry; relations where a file of the same name exists) and
+# ../shared/data/carmen-2d (corrected logs: ODOM increments, reference poses
+# for ATE/RPE), and on the simulated runs (both 2D laser presets), leaves one
+# JSON and one text log per run in out/bench/slam2d/ and prints a markdown
+# table for docs/BENCHMARKS.md (also written to out/bench/slam2d/table.md).
+# Needs a Release build of rmap-bench and jq. Extra arguments go to every run
+# (engine options such as --resolution 0.1; not --odometry, which the runs set).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+bench=build/bin/rmap-bench
+data=${RMAP_SHARED_DATA_DIR:-../shared/data}
+out=out/bench/slam2d
+mkdir -p "$out"
+[ -x "$bench" ] || { echo "slam2d_matrix: build $bench first (Release)" >&2; exit 1; }
+command -v jq >/dev/null || { echo "slam2d_matrix: needs jq" >&2; exit 1; }
+
+runs=()  # names of the JSON files, in table order
+
+run() {  # run NAME ARGS...: one benchmark run, output kept; a failing run is reported, not fatal
+  local name=$1
+  shift
+  echo "== $name" >&2
+  if "$bench" slam2d "$@" --json "$out/$name.json" "${extra[@]}" >"$out/$name.txt" 2>&1; then
+    runs+=("$name")
+  else
+    echo "slam2d_matrix: $name failed, see $out/$name.txt" >&2
+  fi
+}
+
+extra=("$@")
+for log in "$data"/carmen-2d-raw/*.clf*; do
+  [ -e "$log" ] || continue
+  name=$(basename "$log")
+  name=${name%%.clf*}
+  args=(--log "$log")
+  if [ -f "$data/relations/$name.relations" ]; then
+    args+=(--relations "$data/relations/$name.relations")
+    run "raw-$name-no-odometry" "${args[@]}" --odometry none  # scan matching alone
+  fi
+  run "raw-$name" "${args[@]}" --odometry logged  # raw logs: the logged poses are raw odometry
+done
+# Corrected logs hold scans of these raw logs (same ranges; data README): the raw
+# log gives them the stamps the relation files use.
+declare -A raw_of=([intel-corrected]=intel.clf.bz2 [freiburg-079-corrected]=fr079.clf.bz2
+                   [csail-corrected]=mit-csail.clf.gz [csail-corrected-subset.robotlaser1]=mit-csail.clf.gz)
+for log in "$data"/carmen-2d/*.log*; do
+  [ -e "$log" ] || continue
+  name=$(basename "$log")
+  name=${name%%.log*}
+  args=(--log "$log")  # auto odometry: ODOM increments, none without ODOM lines
+  raw=${raw_of[$name]:-}
+  if [ -n "$raw" ] && [ -f "$data/carmen-2d-raw/$raw" ]; then
+    args+=(--stamps-from "$data/carmen-2d-raw/$raw")
+    relations=$data/relations/${raw%%.*}.relations
+    [ -f "$relations" ] && args+=(--relations "$relations")
+  fi
+  run "corrected-${name/-corrected/}" "${args[@]}"
+done
+# Raw logs scored against a corrected log of a subset of their scans (same stamps; data README).
+for pair in "mit-csail.clf.gz:csail-corrected-subset.robotlaser1.log.gz"; do
+  raw=$data/carmen-2d-raw/${pair%%:*}
+  reference=$data/carmen-2d/${pair##*:}
+  [ -f "$raw" ] && [ -f "$reference" ] || continue
+  run "raw-${pair%%.*}-vs-corrected-subset" --log "$raw" --odometry logged --reference "$reference"
+done
+for laser in sick hokuyo; do
+  run "sim-building-$laser" --log sim:building --sim-laser "$laser"
+done
+
+# One row per run; "–" where a figure does not apply (NaN or absent in the JSON).
+{
+  echo "| run | scans | odometry | relations used | rel. trans. error m (mean ± std) | rel. rot. error ° (mean ± std) | reference's rel. trans. error m | ATE m | RPE 1 m | ×real time | CPU s | ATE vs truth m | refl. rel. err. | spread raw → calibrated |"
+  echo "|---|---:|---|---:|---|---|---|---:|---:|---:|---:|---:|---:|---|"
+  for name in "${runs[@]}"; do
+    jq -r --arg name "$name" '
+      def f(d): if . == null then "–" else (. * pow(10; d) | round / pow(10; d) | tostring) end;
+      def pm(x; d): if x.mean == null then "–" else "\(x.mean | f(d)) ± \(x.std | f(d))" end;
+      "| \($name) | \(.scans) | \(.odometry) | \(.relations_used) | \(pm(.rel_trans_err_m; 4)) | \(pm(.rel_rot_err_deg; 3)) | \(pm(.reference_rel_trans_err_m; 4)) | \(.ate_vs_reference_m | f(3)) | \(.rpe_1m_m | f(4)) | \(.realtime_factor | f(0)) | \(.cpu_s | f(2)) | \(.ate_vs_truth_m | f(4)) | \(.reflectivity_rel_err_median | f(3)) | \(if .reflectivity_spread_raw == null then "–" else "\(.reflectivity_spread_raw | f(3)) → \(.reflectivity_spread_calibrated | f(3))" end) |"
+    ' "$out/$name.json"
+  done
+} | tee "$out/table.md"
