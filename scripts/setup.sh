@@ -12,6 +12,7 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   libboost-dev libboost-system-dev libssl-dev
   libprotobuf-dev protobuf-compiler libsqlite3-dev libyaml-cpp-dev
+  libpng-dev  # PNG raster tiles of the 2D layers
   chromium  # the browser tests of the viewer (tests/browser)
 )
 # Node.js and npm fetch and test the viewer. Debian's packages only when there is no npm:

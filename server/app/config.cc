@@ -2,6 +2,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include "app/slam2d_layer.h"
 #include "map3d/cuboid_map.h"
 
 #include <cmath>
@@ -94,6 +95,13 @@ void loadConfigFile(const std::filesystem::path& file, Config& config) {
     readAuth(root["auth"], config.auth);
     readLimits(root["limits"], config.limits);
     readMaps(root["maps"], config.maps);
+    if (const YAML::Node slam2d = root["slam2d"]) {
+      if (const YAML::Node files = slam2d["calibrations"]) {
+        for (const auto& [model, file] : files.as<std::map<std::string, std::string>>()) {
+          config.slam2d.calibration_files[model] = file;
+        }
+      }
+    }
   } catch (const std::exception& e) {
     throw std::runtime_error("config " + file.string() + ": " + e.what());
   }
@@ -176,6 +184,7 @@ void validate(const Config& config) {
   }
   // The map checks its own parameters; building an empty one is cheap.
   map3d::CuboidMap probe(config.maps.resolution_m, config.maps.occupancy, config.maps.fusion);
+  loadCalibrations(config.slam2d);
 }
 
 }  // namespace rmap::app

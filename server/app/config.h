@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -47,6 +48,13 @@ struct MapDefaults {
   int insert_threads = 1;     ///< threads tracing the rays of one cloud
 };
 
+struct Slam2dConfig {
+  /// Intensity calibration file (slam2d::IntensityCalibration text) per
+  /// scanner model, i.e. the `model` of a Hello's LASER_2D sensor; models
+  /// without one are self-calibrated by the SLAM.
+  std::map<std::string, std::filesystem::path> calibration_files;
+};
+
 /// The build's web viewer directory (RMAP_WEB_ROOT, set by CMake; by default
 /// the source tree's web/), so a build tree serves the viewer as it is.
 std::filesystem::path defaultWebRoot();
@@ -65,6 +73,7 @@ struct Config {
   AuthConfig auth;
   LimitsConfig limits;
   MapDefaults maps;
+  Slam2dConfig slam2d;
   std::string log_level = "info";
 };
 

@@ -114,6 +114,10 @@ net::Response HttpApi::route(net::Request& request, const net::Peer& peer, const
     if (s.size() == 5 && s[3] == "occupancy" && s[4] == "box") return occupancyBox(request, target, *map);
     if (s.size() == 4 && s[3] == "tileset.json") return tileset(request, *map);
     if (s.size() == 8 && s[3] == "tiles") return tile(request, target, *map);
+    if (s.size() == 4 && s[3] == "layers") return layers(request, *map);
+    if (s.size() == 8 && s[3] == "layers") return layerTile(request, target, *map);
+    if (s.size() == 4 && s[3] == "grid2d.pgm") return gridPgm(request, *map);
+    if (s.size() == 4 && s[3] == "grid2d.yaml") return gridYaml(request, *map);
   } else if (s[1] == "robots") {
     requireMethod(request, http::verb::get);
     if (s.size() == 2) return listRobots(request);

@@ -35,6 +35,11 @@ class HttpApi {
   net::Response occupancyBox(const net::Request& request, const Target& target, const MapWorker& map);
   net::Response tileset(const net::Request& request, MapWorker& map);
   net::Response tile(const net::Request& request, const Target& target, MapWorker& map);
+  // 2D layers (layer_queries.cc).
+  net::Response layers(const net::Request& request, const MapWorker& map);
+  net::Response layerTile(const net::Request& request, const Target& target, const MapWorker& map);
+  net::Response gridPgm(const net::Request& request, const MapWorker& map);
+  net::Response gridYaml(const net::Request& request, const MapWorker& map);
 
   MappingService& service_;
   const Authenticator& auth_;

@@ -2,6 +2,9 @@
 
 #include <spdlog/spdlog.h>
 
+#include <nlohmann/json.hpp>
+
+#include <cmath>
 #include <map>
 
 #include "app/ingest.h"
@@ -29,16 +32,35 @@ store::TrajectoryPose toTrajectoryPose(const RobotPose& p) {
   return t;
 }
 
+/// A planar pose in 3D, on the map's z = 0 plane.
+Eigen::Isometry3d planarIsometry(const slam2d::Pose2& p, double z_m) {
+  Eigen::Isometry3d out = Eigen::Isometry3d::Identity();
+  out.linear() = Eigen::AngleAxisd(p.theta_rad, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  out.translation() = Eigen::Vector3d(p.x_m, p.y_m, z_m);
+  return out;
+}
+
+int64_t nowNs() {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
 }  // namespace
 
 MapWorker::MapWorker(std::string name, std::unique_ptr<map3d::CuboidMap> map, int64_t applied_id,
-                     const Config& config, store::Store& store, Metrics& metrics, PoseSink pose_sink)
+                     const Config& config, store::Store& store, Metrics& metrics, PoseSink pose_sink,
+                     Slam2dInputs slam2d)
     : name_(std::move(name)),
       map_(std::move(map)),
       config_(config),
       store_(store),
       metrics_(metrics),
       pose_sink_(std::move(pose_sink)),
+      slam2d_(slam2d.calibrations, metrics),
+      sensors_(slam2d.sensors),
+      estimate_sink_(std::move(slam2d.estimate_sink)),
+      slam_first_input_id_(slam2d.first_input_id),
+      restored_id_(applied_id),
       applied_id_(applied_id),
       snapshot_id_(applied_id),
       last_snapshot_(Clock::now()),
@@ -81,7 +103,11 @@ size_t MapWorker::queueDepth() const {
 int64_t MapWorker::appliedId() const { return applied_id_.load(); }
 
 void MapWorker::applyNow(int64_t log_id, const v1::RobotMessage& message, const std::string& robot_id) {
-  apply(log_id, message, robot_id);
+  apply(log_id, message, robot_id, false);
+}
+
+int64_t MapWorker::replayFromId() const {
+  return slam_first_input_id_ > 0 ? std::min(restored_id_, slam_first_input_id_ - 1) : restored_id_;
 }
 
 void MapWorker::run() {
@@ -97,7 +123,7 @@ void MapWorker::run() {
     for (Item& item : batch) {
       const auto start = Clock::now();
       try {
-        apply(item.log_id, *item.message, item.robot_id);
+        apply(item.log_id, *item.message, item.robot_id, true);
       } catch (const std::exception& e) {
         // A checked message should not fail; log it and keep the map going (it stays in the log).
         spdlog::error("map {}: message {} of {} could not be applied: {}", name_, item.message->seq(),
@@ -123,8 +149,17 @@ void MapWorker::run() {
   }
 }
 
-void MapWorker::apply(int64_t log_id, const v1::RobotMessage& message, const std::string& robot_id) {
-  if (message.body_case() == v1::RobotMessage::kCloud) {
+void MapWorker::apply(int64_t log_id, const v1::RobotMessage& message, const std::string& robot_id, bool live) {
+  const bool in_map3d = log_id <= restored_id_;
+  if (message.body_case() == v1::RobotMessage::kScan) {
+    noteSlamInput(log_id);
+    applyScan(message, robot_id, in_map3d, live);
+  } else if (message.body_case() == v1::RobotMessage::kOdometry) {
+    noteSlamInput(log_id);
+    slam2d_.addOdometry(robot_id, message.odometry());
+  } else if (in_map3d) {
+    return;  // recovery below the snapshot replays the 2D SLAM's inputs only
+  } else if (message.body_case() == v1::RobotMessage::kCloud) {
     const v1::PointCloud& cloud = message.cloud();
     const CloudInMap in_map = cloudInMap(cloud);
     map3d::InsertOptions options;
@@ -141,8 +176,59 @@ void MapWorker::apply(int64_t log_id, const v1::RobotMessage& message, const std
                          toIsometry(message.image().camera_pose())};
     if (pose_sink_) pose_sink_(pose);
   }
-  // 2D scans, images and odometry are durable and ordered here; SLAM and loop closure consume them in later stages.
-  applied_id_.store(log_id);
+  // Images are durable and ordered here; loop closure consumes them in a later stage.
+  if (log_id > applied_id_.load()) applied_id_.store(log_id);
+}
+
+void MapWorker::noteSlamInput(int64_t log_id) {
+  if (slam_first_input_id_ > 0) return;
+  // Stored before the message counts as applied, so every snapshot that holds it comes after the mark.
+  store_.appendEvent({0, name_, kSlam2dInputEvent, nowNs(), nlohmann::json{{"message_id", log_id}}.dump()});
+  slam_first_input_id_ = log_id;
+}
+
+void MapWorker::applyScan(const v1::RobotMessage& message, const std::string& robot_id, bool in_map3d, bool live) {
+  const v1::LaserScan2D& scan = message.scan();
+  const std::optional<Laser2dSetup> laser = sensors_.laser(robot_id, message.seq(), scan.sensor());
+  const std::optional<Slam2dResult> result = slam2d_.addScan(robot_id, scan, laser);
+  if (!result || in_map3d) return;
+  // The scan in the 3D map: a planar cloud at the laser's mounting height above the map's z = 0.
+  const double height_m = laser ? laser->z_m : 0.0;
+  const slam2d::Pose2& sensor = result->sensor_pose;
+  std::vector<Eigen::Vector3f> points;
+  points.reserve(result->scan.ranges_m.size());
+  const float range_min_m = std::max(result->scan.range_min_m, 0.0f);
+  for (size_t i = 0; i < result->scan.ranges_m.size(); ++i) {
+    const float r = result->scan.ranges_m[i];
+    if (!std::isfinite(r) || r < range_min_m || r > result->scan.range_max_m) continue;
+    const float a = result->scan.angles_rad[i];
+    const Eigen::Vector2d p = sensor * Eigen::Vector2d(r * std::cos(a), r * std::sin(a));
+    points.emplace_back(static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(height_m));
+  }
+  const Eigen::Vector3f origin(static_cast<float>(sensor.x_m), static_cast<float>(sensor.y_m),
+                               static_cast<float>(height_m));
+  map3d::CellKey origin_cell;
+  if (!points.empty() && map_->grid().cellChecked(origin, origin_cell)) {
+    map3d::InsertOptions options;
+    options.threads = config_.maps.insert_threads;
+    options.invalid_points = map3d::InvalidPoints::kSkip;
+    const map3d::ScanStats stats = map_->insertScan(origin, points, options);
+    metrics_.points_integrated.fetch_add(stats.points - stats.rejected_points, std::memory_order_relaxed);
+  }
+  const RobotPose pose{robot_id, name_, message.seq(), scan.stamp_ns(), planarIsometry(result->base_pose, 0.0)};
+  pending_poses_.emplace_back(robot_id, toTrajectoryPose(pose));
+  if (pose_sink_) pose_sink_(pose);
+  if (live && estimate_sink_) {
+    v1::PoseEstimate estimate;
+    estimate.set_seq(message.seq());
+    estimate.set_stamp_ns(scan.stamp_ns());
+    const Eigen::Quaterniond q(pose.pose.linear());
+    estimate.mutable_pose()->mutable_position_m()->set_x(result->base_pose.x_m);
+    estimate.mutable_pose()->mutable_position_m()->set_y(result->base_pose.y_m);
+    estimate.mutable_pose()->mutable_orientation()->set_w(q.w());
+    estimate.mutable_pose()->mutable_orientation()->set_z(q.z());
+    estimate_sink_(robot_id, estimate);
+  }
 }
 
 void MapWorker::flushTrajectories() {

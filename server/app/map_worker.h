@@ -2,7 +2,9 @@
 /// @file map_worker.h
 /// One named map and the thread that applies durable robot messages to it in
 /// log order, so a replay of the log rebuilds the same map. Also writes the
-/// map's snapshots and the trajectory poses the messages carry.
+/// map's snapshots and the trajectory poses the messages carry. Laser scans
+/// go through the map's 2D SLAM; each estimate goes back to its robot, becomes
+/// its pose and puts the scan into the 3D map as a planar cloud.
 
 #include <chrono>
 #include <condition_variable>
@@ -17,12 +19,18 @@
 
 #include "app/config.h"
 #include "app/metrics.h"
+#include "app/robot_sensors.h"
+#include "app/slam2d_layer.h"
 #include "app/tiles.h"
 #include "map3d/cuboid_map.h"
 #include "rmap/v1/robot_stream.pb.h"
 #include "store/store.h"
 
 namespace rmap::app {
+
+/// Event kind marking the first message that fed a map's 2D SLAM ({"message_id": id}):
+/// recovery replays the SLAM from there, also below the 3D snapshot.
+inline constexpr const char* kSlam2dInputEvent = "slam2d_input";
 
 /// A robot pose a message placed in the map.
 struct RobotPose {
@@ -36,18 +44,32 @@ struct RobotPose {
 class MapWorker {
  public:
   using PoseSink = std::function<void(const RobotPose&)>;
+  /// Sends a 2D SLAM estimate to the robot's open stream, if any.
+  using EstimateSink = std::function<void(const std::string& robot_id, const v1::PoseEstimate&)>;
+
+  /// What the 2D SLAM of a map needs from the service.
+  struct Slam2dInputs {
+    const Calibrations& calibrations;
+    const RobotSensors& sensors;
+    EstimateSink estimate_sink;
+    /// Log id of the first message that fed this map's SLAM (kSlam2dInputEvent), 0 when none yet.
+    int64_t first_input_id = 0;
+  };
 
   /// @param map            the map (from a snapshot or new)
   /// @param applied_id     log id already in `map` (the snapshot's), 0 for a new map
   MapWorker(std::string name, std::unique_ptr<map3d::CuboidMap> map, int64_t applied_id, const Config& config,
-            store::Store& store, Metrics& metrics, PoseSink pose_sink);
+            store::Store& store, Metrics& metrics, PoseSink pose_sink, Slam2dInputs slam2d);
   /// stop().
   ~MapWorker();
   MapWorker(const MapWorker&) = delete;
   MapWorker& operator=(const MapWorker&) = delete;
 
   /// Applies a message synchronously on the caller's thread (recovery, before start()).
+  /// A message at or below the snapshot's id only feeds the 2D SLAM, which has no snapshot.
   void applyNow(int64_t log_id, const v1::RobotMessage& message, const std::string& robot_id);
+  /// Where recovery starts reading the log: after the snapshot, or earlier for the 2D SLAM.
+  int64_t replayFromId() const;
   /// Starts the apply thread.
   void start();
   /// Applies what is queued, joins the thread and writes a final snapshot; later
@@ -61,6 +83,7 @@ class MapWorker {
 
   const std::string& name() const { return name_; }
   const map3d::CuboidMap& map() const { return *map_; }
+  const Slam2dLayer& slam2d() const { return slam2d_; }
   TileIndex& tiles() { return tiles_; }
   size_t queueDepth() const;
   int64_t appliedId() const;
@@ -73,7 +96,10 @@ class MapWorker {
     std::function<void()> applied;
   };
   void run();
-  void apply(int64_t log_id, const v1::RobotMessage& message, const std::string& robot_id);
+  void apply(int64_t log_id, const v1::RobotMessage& message, const std::string& robot_id, bool live);
+  /// @param in_map3d  the 3D map, trajectory and robot poses hold this message already (snapshot)
+  void applyScan(const v1::RobotMessage& message, const std::string& robot_id, bool in_map3d, bool live);
+  void noteSlamInput(int64_t log_id);
   void flushTrajectories();
   void writeSnapshot();
 
@@ -84,6 +110,11 @@ class MapWorker {
   Metrics& metrics_;
   PoseSink pose_sink_;
   TileIndex tiles_;
+  Slam2dLayer slam2d_;
+  const RobotSensors& sensors_;
+  EstimateSink estimate_sink_;
+  int64_t slam_first_input_id_;
+  const int64_t restored_id_;  ///< log id of the snapshot the 3D map was restored from
 
   mutable std::mutex mutex_;
   std::condition_variable wake_;

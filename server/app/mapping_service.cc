@@ -80,8 +80,11 @@ std::vector<std::string> readMapParams(const store::MapRecord& record, map3d::Oc
 const char* MappingService::version() { return RMAP_VERSION; }
 
 MappingService::MappingService(Config config)
-    : config_(std::move(config)), viewers_(metrics_, config_.limits.viewer_send_queue_bytes) {
+    : config_(std::move(config)),
+      viewers_(metrics_, config_.limits.viewer_send_queue_bytes),
+      calibrations_(loadCalibrations(config_.slam2d)) {
   store_ = store::Store::open(config_.data_dir);
+  loadSlam2dEvents();
   // Event ids are never reused, so the id of this start's event exceeds every earlier epoch.
   epoch_ = store_->appendEvent({0, "", "rmapd_start", nowNs(), nlohmann::json{{"version", version()}}.dump()});
   metrics_.messages_durable = store_->messageCount();
@@ -147,10 +150,20 @@ std::shared_ptr<MapWorker> MappingService::makeWorker(const store::MapRecord& re
                    record.name, kept.dump(), configured.dump());
     }
   }
+  const auto first_input = slam_first_input_.find(record.name);
+  MapWorker::Slam2dInputs slam2d{
+      calibrations_, sensors_,
+      [this](const std::string& robot_id, const v1::PoseEstimate& estimate) { sendEstimate(robot_id, estimate); },
+      first_input == slam_first_input_.end() ? 0 : first_input->second};
   auto worker = std::make_shared<MapWorker>(record.name, std::move(map), applied_id, config_, *store_, metrics_,
-                                            [this](const RobotPose& pose) { onPose(pose); });
+                                            [this](const RobotPose& pose) { onPose(pose); }, std::move(slam2d));
   if (recover) {
-    store_->forEachMessage(record.name, applied_id, [&](const store::StoredMessage& stored) {
+    store_->forEachMessage(record.name, worker->replayFromId(), [&](const store::StoredMessage& stored) {
+      // Below the snapshot only the 2D SLAM's inputs are replayed.
+      const int32_t kind = stored.record.kind;
+      if (stored.id <= applied_id && kind != v1::RobotMessage::kScan && kind != v1::RobotMessage::kOdometry) {
+        return true;
+      }
       v1::RobotMessage message;
       if (!message.ParseFromString(stored.record.payload)) {
         spdlog::error("map {}: logged message {} does not parse; skipped", record.name, stored.id);
@@ -314,6 +327,47 @@ std::optional<RobotStatus> MappingService::robot(const std::string& robot_id) co
   if (!record) return std::nullopt;
   std::lock_guard lock(robots_mutex_);
   return status(*record);
+}
+
+void MappingService::loadSlam2dEvents() {
+  constexpr size_t kPage = 1000;
+  for (int64_t cursor = 0;;) {
+    const std::vector<store::EventRecord> events = store_->events("", cursor, kPage);
+    for (const store::EventRecord& e : events) {
+      cursor = e.id;
+      try {
+        if (e.kind == kRobotSensorsEvent) {
+          sensors_.addJson(e.json);
+        } else if (e.kind == kSlam2dInputEvent) {
+          const int64_t id = nlohmann::json::parse(e.json).at("message_id").get<int64_t>();
+          auto [it, inserted] = slam_first_input_.try_emplace(e.map, id);
+          if (!inserted) it->second = std::min(it->second, id);
+        }
+      } catch (const std::exception& ex) {
+        throw std::runtime_error("event " + std::to_string(e.id) + " (" + e.kind + ") is unreadable: " + ex.what());
+      }
+    }
+    if (events.size() < kPage) break;
+  }
+}
+
+void MappingService::declareLasers(const std::string& robot_id, const std::string& map, uint64_t after_seq,
+                                   std::vector<Laser2dSetup> lasers) {
+  std::lock_guard lock(declare_mutex_);
+  if (!sensors_.isNew(robot_id, after_seq, lasers)) return;
+  store_->appendEvent({0, map, kRobotSensorsEvent, nowNs(), lasersJson(robot_id, after_seq, lasers)});
+  sensors_.add(robot_id, after_seq, std::move(lasers));
+}
+
+void MappingService::sendEstimate(const std::string& robot_id, const v1::PoseEstimate& estimate) {
+  std::shared_ptr<RobotSession> session;
+  {
+    std::lock_guard lock(robots_mutex_);
+    if (const auto it = sessions_.find(robot_id); it != sessions_.end()) session = it->second.session.lock();
+  }
+  if (session && session->sendPoseEstimate(estimate)) {
+    metrics_.pose_estimates_sent.fetch_add(1, std::memory_order_relaxed);
+  }
 }
 
 void MappingService::onPose(const RobotPose& pose) {

@@ -72,6 +72,12 @@ class MappingService {
   /// overtake the first copy.
   void whenApplied(int64_t log_id, std::function<void()> fn);
 
+  /// Records the 2D lasers of a robot's Hello for its messages with seq >
+  /// `after_seq` (durably, before the Welcome: a replay gives scans the same
+  /// sensors). @throws store::StoreError
+  void declareLasers(const std::string& robot_id, const std::string& map, uint64_t after_seq,
+                     std::vector<Laser2dSetup> lasers);
+
   /// Registers a robot's stream (an older stream of the same robot is closed)
   /// and returns its highest durable sequence number.
   uint64_t robotConnected(const std::string& robot_id, const std::string& map, const std::string& sensors_json,
@@ -97,9 +103,13 @@ class MappingService {
   };
 
   std::shared_ptr<MapWorker> makeWorker(const store::MapRecord& record, bool recover);
+
   void appliedDone(int64_t log_id);
   RobotStatus status(const store::RobotRecord& record) const;  ///< needs robots_mutex_
   void onPose(const RobotPose& pose);
+  void sendEstimate(const std::string& robot_id, const v1::PoseEstimate& estimate);
+  /// Reads the robots' declared lasers and the maps' first SLAM inputs from the store's events.
+  void loadSlam2dEvents();
   void tickLoop();
 
   Config config_;
@@ -107,6 +117,10 @@ class MappingService {
   std::unique_ptr<store::Store> store_;
   int64_t epoch_ = 0;
   ViewerHub viewers_;
+  Calibrations calibrations_;
+  RobotSensors sensors_;
+  std::mutex declare_mutex_;                        ///< one declareLasers at a time: check, store, record
+  std::map<std::string, int64_t> slam_first_input_;  ///< per map, from the store's events at start
   mutable std::mutex maps_mutex_;
   std::map<std::string, std::shared_ptr<MapWorker>> maps_;
   std::mutex applying_mutex_;

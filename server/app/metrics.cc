@@ -79,6 +79,12 @@ std::string renderPrometheus(const Metrics& m, const MetricsGauges& g) {
          load(m.viewer_frames_dropped));
   metric(out, "rmap_snapshots_written_total", "counter", "Map snapshots written to the store.",
          load(m.snapshots_written));
+  metric(out, "rmap_slam2d_scans_total", "counter", "Laser scans taken by the 2D SLAM, replayed ones included.",
+         load(m.slam2d_scans));
+  metric(out, "rmap_slam2d_scans_refused_total", "counter", "Laser scans the 2D SLAM could not use.",
+         load(m.slam2d_scans_refused));
+  metric(out, "rmap_pose_estimates_sent_total", "counter", "PoseEstimates sent to robots.",
+         load(m.pose_estimates_sent));
   metric(out, "rmap_robot_connections", "gauge", "Open robot streams.", g.robot_connections);
   metric(out, "rmap_viewer_connections", "gauge", "Open viewer streams.", g.viewer_connections);
   metric(out, "rmap_http_connections", "gauge", "Open connections (HTTP and WebSocket).", g.http_connections);
@@ -92,6 +98,8 @@ std::string renderPrometheus(const Metrics& m, const MetricsGauges& g) {
   m.ack_latency.render("rmap_ack_latency_seconds", "From a robot frame's arrival to its acknowledgement.", out);
   m.apply_latency.render("rmap_apply_latency_seconds", "Time to apply one message to its map.", out);
   m.http_latency.render("rmap_http_request_seconds", "Time to answer an HTTP request.", out);
+  m.slam2d_scan_latency.render("rmap_slam2d_scan_seconds", "Time of one scan in the 2D SLAM (matching, map update).",
+                               out);
   return out;
 }
 

@@ -41,9 +41,13 @@ struct Metrics {
   std::atomic<uint64_t> viewer_frames_sent{0};
   std::atomic<uint64_t> viewer_frames_dropped{0};
   std::atomic<uint64_t> snapshots_written{0};
+  std::atomic<uint64_t> slam2d_scans{0};          ///< laser scans the 2D SLAM took (replayed ones included)
+  std::atomic<uint64_t> slam2d_scans_refused{0};  ///< laser scans the 2D SLAM could not use
+  std::atomic<uint64_t> pose_estimates_sent{0};   ///< PoseEstimates queued to robots
   LatencyHistogram ack_latency;      ///< frame received → ack queued
   LatencyHistogram apply_latency;    ///< one message applied to its map
   LatencyHistogram http_latency;
+  LatencyHistogram slam2d_scan_latency;  ///< one scan through the 2D SLAM (scan matching and map update)
 };
 
 /// Gauges read at scrape time.

@@ -4,6 +4,7 @@
 
 #include "app/ingest.h"
 #include "app/mapping_service.h"
+#include "app/robot_sensors.h"
 
 namespace rmap::app {
 
@@ -42,10 +43,16 @@ void RobotSession::onClose() {
   if (!robot_id_.empty()) service_.robotDisconnected(robot_id_, this);
 }
 
-void RobotSession::send(const v1::ServerMessage& message) {
-  if (connection_ && !connection_->send(message.SerializeAsString(), true)) {
-    spdlog::debug("robot {}: reply dropped (send queue full or closed)", robot_id_);
-  }
+bool RobotSession::send(const v1::ServerMessage& message) {
+  if (connection_ && connection_->send(message.SerializeAsString(), true)) return true;
+  spdlog::debug("robot {}: reply dropped (send queue full or closed)", robot_id_);
+  return false;
+}
+
+bool RobotSession::sendPoseEstimate(const v1::PoseEstimate& estimate) {
+  v1::ServerMessage reply;
+  *reply.mutable_pose() = estimate;
+  return send(reply);
 }
 
 void RobotSession::sendError(const std::string& code, const std::string& message, uint64_t seq, bool fatal) {
@@ -122,6 +129,8 @@ void RobotSession::handleHello(const v1::Hello& hello) {
     map_ = service_.openMap(hello.map(), hello.resolution_m());
     robot_id_ = hello.robot_id();
     const uint64_t last_seq = service_.robotConnected(robot_id_, hello.map(), sensorsJson(hello), shared_from_this());
+    // The messages this session numbers (seq > last_seq) are scanned with this Hello's lasers.
+    service_.declareLasers(robot_id_, hello.map(), last_seq, lasersOf(hello));
     v1::ServerMessage reply;
     v1::Welcome* welcome = reply.mutable_welcome();
     welcome->set_session_id(robot_id_ + "@" + std::to_string(nowNs()));

@@ -28,6 +28,8 @@ class RobotSession : public net::WsHandler, public std::enable_shared_from_this<
   void onMessage(std::string data, bool binary) override;
   void onClose() override;
 
+  /// Queues a 2D SLAM estimate to the robot. @return false when it was dropped (closed, queue full)
+  bool sendPoseEstimate(const v1::PoseEstimate& estimate);
   /// Ends the stream with a fatal error (e.g. the robot connected again elsewhere).
   void closeWithError(const std::string& code, const std::string& message);
   const std::string& robotId() const { return robot_id_; }
@@ -41,7 +43,7 @@ class RobotSession : public net::WsHandler, public std::enable_shared_from_this<
   /// Called once the message is durable (or failed) and applied.
   void finish(uint64_t seq, bool duplicate, std::chrono::steady_clock::time_point received, const char* error);
   void sendError(const std::string& code, const std::string& message, uint64_t seq, bool fatal);
-  void send(const v1::ServerMessage& message);
+  bool send(const v1::ServerMessage& message);
   bool takeRateToken();
 
   MappingService& service_;

@@ -24,6 +24,7 @@ export class Renderer2D {
     this.tiles = new Map();
     this.robots = new Map();
     this.loops = [];
+    this.layerTiles = [];
     this.colorMode = 'height';
     this.zLo = 0;
     this.zHi = 3;
@@ -127,6 +128,11 @@ export class Renderer2D {
     const ctx = this.ctx;
     ctx.fillStyle = BACKGROUND;
     ctx.fillRect(0, 0, this.canvas.width, this.canvas.height);
+    ctx.imageSmoothingEnabled = false; // one cell per pixel at the native zoom
+    for (const t of this.layerTiles) {
+      const [x0, y0, x1, y1] = t.bounds;
+      ctx.drawImage(t.image, this.sx(x0), this.sy(y1), (x1 - x0) * this.scale, (y1 - y0) * this.scale);
+    }
     // Bucket cuboids by top height so higher ones are drawn over lower ones.
     const bins = [];
     for (let i = 0; i < BINS; i++) bins.push([]);
@@ -219,6 +225,9 @@ export class Renderer2D {
   setAutoRotate() {}
   setControlsEnabled(on) { this.controlsEnabled = on; }
   setRobotsVisible(on) { this.robotsVisible = on; this.requestRender(); }
+
+  /** 2D layer tiles: [{image, bounds: [x0, y0, x1, y1] (m)}], drawn under the cuboids. */
+  setLayerTiles(list) { this.layerTiles = list; this.requestRender(); }
 
   setTile(key, tile) {
     if (tile.occupied === undefined) {

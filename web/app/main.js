@@ -7,6 +7,7 @@
 import { Api, ApiError } from './api.js';
 import { ROBOT_COLORS } from './colors.js';
 import { Renderer2D } from './fallback2d.js';
+import { Layers2D } from './layers2d.js';
 import { Renderer3D, webglAvailable } from './scene3d.js';
 import { ViewerStream } from './stream.js';
 import { TileManager, keyName } from './tiles.js';
@@ -471,21 +472,30 @@ async function refreshLoops() {
 
 // ----- 2D layers -----
 
-async function probeLayers() {
-  if (!state.map) return;
-  const status = await api.probe(`/v1/maps/${encodeURIComponent(state.map)}/layers/occupancy/0/0/0.png`).catch(() => 0);
-  state.layersAvailable = status === 200;
-  const note = $('layers-empty');
-  note.textContent = status === 200
-    ? '2D layers: the server has raster tiles; drawing them arrives with the raster tile spec.'
-    : '2D layers arrive with laser SLAM';
-  note.classList.toggle('hidden', !$('show-layers').checked);
+const layers = new Layers2D(api, renderer, {
+  onState: (status, detail) => {
+    state.layersAvailable = status === 'shown';
+    state.layersVersion = status === 'shown' ? detail.version : null;
+    $('layers-empty').classList.toggle('hidden', status === 'shown' || !$('show-layers').checked);
+    if (status === 'error') noteError(detail);
+  },
+});
+
+function probeLayers() {
+  if (!state.map || !$('show-layers').checked) return;
+  layers.show(state.map, $('layer-select').value).catch((e) => noteError(e));
 }
 
 $('show-layers').addEventListener('change', (e) => {
-  if (e.target.checked) probeLayers();
-  else $('layers-empty').classList.add('hidden');
+  if (e.target.checked) {
+    probeLayers();
+  } else {
+    layers.hide();
+    $('layers-empty').classList.add('hidden');
+  }
 });
+$('layer-select').addEventListener('change', () => probeLayers());
+setInterval(() => probeLayers(), MAP_POLL_MS);
 
 // ----- display options -----
 
@@ -820,6 +830,8 @@ window.rmapViewer = Object.freeze({
   loopClosures: () => copy(state.loops.map((lc) => lc.event)),
   query: (x, y, z) => api.json(occupancyUrl(x, y, z)),
   timings: () => ({ ...state.timings }),
+  layers: () => ({ available: state.layersAvailable, version: state.layersVersion ?? null,
+    tiles: [...layers.shown] }),
   frameStats: (n) => renderer.frameStats(n),
   frames: () => renderer.frames,
   errors: () => [...state.errors],

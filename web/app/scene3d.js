@@ -91,6 +91,12 @@ export class Renderer3D {
 
     this.loopGroup = new THREE.Group();
     this.scene.add(this.loopGroup);
+    this.layerGroup = new THREE.Group(); // 2D layer rasters on the ground plane
+    this.scene.add(this.layerGroup);
+    this.layerGeometry = new THREE.PlaneGeometry(1, 1);
+    // Image row 0 is the tile's +y edge; ImageBitmaps are not flipped on upload, so flip the UVs.
+    const uv = this.layerGeometry.attributes.uv;
+    for (let i = 0; i < uv.count; i++) uv.setY(i, 1 - uv.getY(i));
 
     const edges = new THREE.EdgesGeometry(new THREE.BoxGeometry(1, 1, 1));
     this.highlight = new THREE.LineSegments(edges, new THREE.LineBasicMaterial({ color: 0xffffff, depthTest: false }));
@@ -535,6 +541,32 @@ export class Renderer3D {
     robot.line.geometry.dispose();
     robot.line.material.dispose();
     this.robots.delete(id);
+    this.requestRender('data');
+  }
+
+  /** 2D layer tiles: [{image (ImageBitmap), bounds: [x0, y0, x1, y1] (m)}], drawn on z = 0. */
+  setLayerTiles(list) {
+    for (const child of [...this.layerGroup.children]) {
+      this.layerGroup.remove(child);
+      child.material.map.dispose();
+      child.material.dispose();
+    }
+    for (const t of list) {
+      const texture = new THREE.Texture(t.image);
+      texture.magFilter = THREE.NearestFilter; // one cell per texel at the native zoom
+      texture.minFilter = THREE.LinearFilter;
+      texture.generateMipmaps = false;
+      texture.colorSpace = THREE.SRGBColorSpace;
+      texture.needsUpdate = true;
+      const material = new THREE.MeshBasicMaterial({ map: texture, transparent: true, depthWrite: false,
+        side: THREE.DoubleSide });
+      const mesh = new THREE.Mesh(this.layerGeometry, material);
+      const [x0, y0, x1, y1] = t.bounds;
+      mesh.scale.set(x1 - x0, y1 - y0, 1);
+      mesh.position.set((x0 + x1) / 2, (y0 + y1) / 2, 0.01);
+      mesh.renderOrder = 1;
+      this.layerGroup.add(mesh);
+    }
     this.requestRender('data');
   }
 

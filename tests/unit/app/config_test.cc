@@ -8,6 +8,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "app/slam2d_layer.h"
 #include "rmap/v1/map_api.pb.h"
 
 namespace rmap::app {
@@ -274,6 +275,41 @@ TEST(RoleToString, NamesEveryRole) {
   EXPECT_STREQ(toString(Role::kRobot), "robot");
   EXPECT_STREQ(toString(Role::kViewer), "viewer");
   EXPECT_STREQ(toString(Role::kAdmin), "admin");
+}
+
+}  // namespace
+}  // namespace rmap::app
+
+namespace rmap::app {
+namespace {
+
+TEST(Slam2dCalibrations, FilesPerModelAreReadAndParsed) {
+  const slam2d::IntensityCalibration calibration({std::log(0.5), std::log(20.0), {1.0, 1.0, 1.0, 1.0}},
+                                                 {0.0, 80.0, {0.0, 0.0, 0.0, 0.0}}, 1000.0, 1.0);
+  const YamlFile file(calibration.toText());
+  const YamlFile config_file("slam2d:\n  calibrations:\n    sick_like: " + file.path().string() + "\n");
+  Config config;
+  loadConfigFile(config_file.path(), config);
+  ASSERT_EQ(config.slam2d.calibration_files.size(), 1u);
+  EXPECT_EQ(config.slam2d.calibration_files.at("sick_like"), file.path());
+  const Calibrations loaded = loadCalibrations(config.slam2d);
+  ASSERT_EQ(loaded.size(), 1u);
+  EXPECT_EQ(loaded.at("sick_like").toText(), calibration.toText());
+  EXPECT_NO_THROW(validate(config));
+}
+
+TEST(Slam2dCalibrations, AMissingOrBadFileIsRefusedNamingTheModel) {
+  Config config;
+  config.slam2d.calibration_files["utm"] = "/nonexistent/utm.calib";
+  try {
+    validate(config);
+    ADD_FAILURE() << "a missing calibration file was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("model 'utm'"), std::string::npos) << e.what();
+  }
+  const YamlFile bad("rmap_intensity_calibration 1\nrange_m 5 1\n");
+  config.slam2d.calibration_files["utm"] = bad.path();
+  EXPECT_THROW(validate(config), std::invalid_argument);
 }
 
 }  // namespace

@@ -116,7 +116,7 @@ TEST(RenderPrometheus, EveryMetricHasOneHelpAndOneTypeLine) {
   for (size_t at = out.find("# HELP "); at != std::string::npos; at = out.find("# HELP ", at + 1)) ++help;
   for (size_t at = out.find("# TYPE "); at != std::string::npos; at = out.find("# TYPE ", at + 1)) ++type;
   EXPECT_EQ(help, type);
-  EXPECT_EQ(help, 13u + 9u + 3u);  // counters, gauges, histograms
+  EXPECT_EQ(help, 16u + 9u + 4u);  // counters, gauges, histograms
 }
 
 }  // namespace

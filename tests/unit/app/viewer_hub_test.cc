@@ -188,8 +188,11 @@ TEST_F(ViewerHubTest, TickSendsTileChangesOfAMapWorkerOnce) {
   const Viewer lab = open("lab"), other = open("other");
   const Config config;
   NullStore store;
+  const RobotSensors sensors;
+  const Calibrations calibrations;
   auto worker = std::make_shared<MapWorker>("lab", std::make_unique<map3d::CuboidMap>(0.1), 0, config, store,
-                                            metrics_, [&](const RobotPose& p) { hub_.publishPose(p); });
+                                            metrics_, [&](const RobotPose& p) { hub_.publishPose(p); },
+                                            MapWorker::Slam2dInputs{calibrations, sensors, nullptr, 0});
   v1::RobotMessage cloud;
   cloud.set_seq(1);
   cloud.mutable_cloud()->set_frame(v1::PointCloud::MAP);

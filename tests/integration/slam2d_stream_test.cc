@@ -1,0 +1,331 @@
+// A simulated robot with a 2D laser streams scans (intensities, noisy odometry)
+// into a real rmapd: the PoseEstimates it gets back follow the true path, the
+// reflectivity tiles show the building's reflective markers, the map_server
+// export matches the occupancy tiles, and a kill -9 replays to the same map.
+#include <gtest/gtest.h>
+#include <png.h>
+
+#include <cmath>
+#include <map>
+#include <mutex>
+#include <random>
+#include <sstream>
+
+#include "api_helpers.h"
+#include "client/http_client.h"
+#include "client/robot_client.h"
+#include "rmapd_process.h"
+#include "sim/building.h"
+#include "sim/laser2d.h"
+#include "sim/trajectory.h"
+
+namespace rmap::testing {
+namespace {
+
+constexpr double kLaserHeight_m = 1.0;
+constexpr double kLaserForward_m = 0.15;  // laser ahead of the robot base
+
+/// Planar pose (x, y, yaw) of a level 3D pose.
+Eigen::Vector3d planar(const Eigen::Isometry3d& pose) {
+  const Eigen::Vector3d x_axis = pose.linear().col(0);
+  return {pose.translation().x(), pose.translation().y(), std::atan2(x_axis.y(), x_axis.x())};
+}
+
+Eigen::Vector3d compose(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  const double c = std::cos(a.z()), s = std::sin(a.z());
+  return {a.x() + c * b.x() - s * b.y(), a.y() + s * b.x() + c * b.y(), std::remainder(a.z() + b.z(), 2 * M_PI)};
+}
+
+Eigen::Vector3d between(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  const double c = std::cos(a.z()), s = std::sin(a.z());
+  const Eigen::Vector2d d = b.head<2>() - a.head<2>();
+  return {c * d.x() + s * d.y(), -s * d.x() + c * d.y(), std::remainder(b.z() - a.z(), 2 * M_PI)};
+}
+
+struct GreyAlpha {
+  int width = 0, height = 0;
+  std::vector<uint8_t> pixels;
+};
+
+GreyAlpha decodePng(const std::string& png) {
+  png_image image{};
+  image.version = PNG_IMAGE_VERSION;
+  if (!png_image_begin_read_from_memory(&image, png.data(), png.size())) throw std::runtime_error("not a PNG");
+  image.format = PNG_FORMAT_GA;
+  GreyAlpha out{static_cast<int>(image.width), static_cast<int>(image.height),
+                std::vector<uint8_t>(PNG_IMAGE_SIZE(image))};
+  if (!png_image_finish_read(&image, nullptr, out.pixels.data(), 0, nullptr)) throw std::runtime_error("bad PNG");
+  return out;
+}
+
+/// Cells of a layer read through native-zoom tiles (one cell per pixel), fetched once each.
+class LayerCells {
+ public:
+  LayerCells(client::HttpClient& http, std::string map, std::string layer)
+      : http_(http), prefix_("/v1/maps/" + std::move(map) + "/layers/" + std::move(layer) + "/8/") {}
+  /// Grey and alpha of a cell.
+  std::pair<uint8_t, uint8_t> at(int cx, int cy) {
+    const int tx = (cx + 32768) >> 8, ty = (32767 - cy) >> 8;
+    auto it = tiles_.find({tx, ty});
+    if (it == tiles_.end()) {
+      const client::HttpResponse r = http_.get(prefix_ + std::to_string(tx) + "/" + std::to_string(ty) + ".png");
+      EXPECT_EQ(r.status, 200) << r.body;
+      EXPECT_EQ(r.header("content-type"), "image/png");
+      it = tiles_.emplace(std::pair{tx, ty}, decodePng(r.body)).first;
+    }
+    const size_t i = 2 * static_cast<size_t>(((32767 - cy) & 255) * 256 + ((cx + 32768) & 255));
+    return {it->second.pixels[i], it->second.pixels[i + 1]};
+  }
+
+ private:
+  client::HttpClient& http_;
+  std::string prefix_;
+  std::map<std::pair<int, int>, GreyAlpha> tiles_;
+};
+
+std::map<std::string, std::string> parseYaml(const std::string& text) {
+  std::map<std::string, std::string> out;
+  std::istringstream in(text);
+  for (std::string line; std::getline(in, line);) {
+    const size_t colon = line.find(": ");
+    if (colon != std::string::npos) out[line.substr(0, colon)] = line.substr(colon + 2);
+  }
+  return out;
+}
+
+TEST(Slam2dStream, ScansGetPoseEstimatesAndMakeTheTwoDimensionalLayers) {
+  TempDir dir("rmap-slam2d");
+  auto rmapd = std::make_unique<RmapdProcess>(dir.path() / "data");
+
+  // The building, with its reflective tape markers reaching the laser's plane.
+  sim::BuildingOptions building;
+  building.max_furniture_per_room = 1;
+  sim::BuildingLayout layout;
+  sim::VoxelWorld world = sim::makeBuilding(building, 3, &layout);
+  ASSERT_FALSE(layout.markers.empty());
+  for (const Eigen::AlignedBox3d& m : layout.markers) {
+    world.fillBox(Eigen::AlignedBox3d(Eigen::Vector3d(m.min().x(), m.min().y(), kLaserHeight_m - 0.3),
+                                      Eigen::Vector3d(m.max().x(), m.max().y(), kLaserHeight_m + 0.3)),
+                  0.95f);
+  }
+  sim::TrajectoryOptions path;
+  path.sensor_height_m = kLaserHeight_m;
+  path.num_poses = 160;
+  path.step_m = 0.26;
+  const std::vector<Eigen::Isometry3d> sensor_poses = sim::planTrajectory(world, path, 5);
+  const sim::Laser2dModel laser = sim::Laser2dModel::sickLike();
+  const Eigen::Vector3d mount(kLaserForward_m, 0.0, 0.0);
+  const Eigen::Vector3d mount_inverse(-kLaserForward_m, 0.0, 0.0);
+
+  client::RobotClientOptions options;
+  options.server_url = rmapd->wsUrl();
+  options.hello.set_robot_id("walker");
+  options.hello.set_map("floor");
+  v1::SensorDescription* sensor = options.hello.add_sensors();
+  sensor->set_name("front");
+  sensor->set_kind(v1::SensorDescription::LASER_2D);
+  sensor->set_model(laser.name);
+  sensor->mutable_mount()->mutable_position_m()->set_x(kLaserForward_m);
+  sensor->mutable_mount()->mutable_position_m()->set_z(kLaserHeight_m);
+  sensor->mutable_mount()->mutable_orientation()->set_w(1.0);
+  std::mutex mutex;
+  std::map<uint64_t, v1::PoseEstimate> estimates;
+  client::RobotClient robot(options);
+  robot.onPose([&](const v1::PoseEstimate& e) {
+    std::lock_guard lock(mutex);
+    estimates[e.seq()] = e;
+  });
+  robot.connect();
+
+  std::mt19937_64 rng(11);
+  std::normal_distribution<double> unit(0.0, 1.0);
+  std::map<uint64_t, Eigen::Vector3d> truth;
+  Eigen::Vector3d odometry;
+  for (size_t k = 0; k < sensor_poses.size(); ++k) {
+    const Eigen::Vector3d base = compose(planar(sensor_poses[k]), mount_inverse);
+    if (k == 0) {
+      odometry = base;  // odometry in the map frame: the SLAM's frame is the world's
+    } else {
+      // Wheel odometry drifts: 5 % noise on each step, plus a rotation error.
+      const Eigen::Vector3d step = between(compose(planar(sensor_poses[k - 1]), mount_inverse), base);
+      const double d = step.head<2>().norm();
+      const Eigen::Vector3d noisy(step.x() * (1 + 0.05 * unit(rng)), step.y() + 0.02 * d * unit(rng),
+                                  step.z() + 0.02 * unit(rng));
+      odometry = compose(odometry, noisy);
+    }
+    const sim::Laser2dScan scan = sim::simulateLaser2d(world, sensor_poses[k], laser, rng);
+    v1::RobotMessage m;
+    v1::LaserScan2D* out = m.mutable_scan();
+    out->set_sensor("front");
+    out->set_stamp_ns(static_cast<int64_t>(k) * 100'000'000);
+    out->set_angle_min_rad(scan.angle_min_rad);
+    out->set_angle_increment_rad(scan.angle_increment_rad);
+    out->set_range_min_m(scan.range_min_m);
+    out->set_range_max_m(scan.range_max_m);
+    for (size_t i = 0; i < scan.ranges_m.size(); ++i) {
+      // The simulator reads "too close" as −inf; the protocol has only +inf for no return.
+      out->add_ranges_m(std::isfinite(scan.ranges_m[i]) ? scan.ranges_m[i] : INFINITY);
+      out->add_intensities(scan.intensities[i]);
+    }
+    out->mutable_odometry()->set_x_m(odometry.x());
+    out->mutable_odometry()->set_y_m(odometry.y());
+    out->mutable_odometry()->set_theta_rad(odometry.z());
+    truth[robot.send(m)] = base;
+  }
+  ASSERT_TRUE(robot.waitAllAcked(std::chrono::seconds(120)));
+
+  // Every scan got its estimate before its ack, within 0.1 m of the truth.
+  {
+    std::lock_guard lock(mutex);
+    ASSERT_EQ(estimates.size(), truth.size());
+    double worst_m = 0.0, worst_rad = 0.0;
+    for (const auto& [seq, base] : truth) {
+      const v1::PoseEstimate& e = estimates.at(seq);
+      EXPECT_EQ(e.stamp_ns(), static_cast<int64_t>(seq - 1) * 100'000'000);
+      const Eigen::Vector2d p(e.pose().position_m().x(), e.pose().position_m().y());
+      const double yaw = 2 * std::atan2(e.pose().orientation().z(), e.pose().orientation().w());
+      worst_m = std::max(worst_m, (p - base.head<2>()).norm());
+      worst_rad = std::max(worst_rad, std::abs(std::remainder(yaw - base.z(), 2 * M_PI)));
+    }
+    EXPECT_LT(worst_m, 0.1);
+    EXPECT_LT(worst_rad, 0.05);
+    std::printf("[ estimates ] %zu scans, worst error %.3f m, %.4f rad\n", truth.size(), worst_m, worst_rad);
+  }
+
+  client::HttpClient http(rmapd->httpUrl());
+  const nlohmann::json info = getJson(http, "/v1/maps/floor/layers");
+  EXPECT_EQ(info["scans"].get<size_t>(), truth.size());
+  EXPECT_EQ(info["tile_px"].get<int>(), 256);
+  const double r = info["resolution_m"].get<double>();
+  ASSERT_GT(r, 0.0);
+  EXPECT_DOUBLE_EQ(info["extent_max_m"][0].get<double>(), 32768 * r);
+
+  // The robot's pose and the planar cloud in the 3D map.
+  const nlohmann::json walker = getJson(http, "/v1/robots/walker");
+  ASSERT_TRUE(walker["pose"].is_object()) << walker.dump();
+  EXPECT_NEAR(walker["pose"]["position"][0].get<double>(), truth.rbegin()->second.x(), 0.1);
+  const nlohmann::json map3d = getJson(http, "/v1/maps/floor");
+  EXPECT_GT(map3d["occupied_cells"].get<int64_t>(), 100);
+  EXPECT_NEAR(map3d["bounds"]["min"][2].get<double>(), kLaserHeight_m, 0.2);
+
+  // Reflectivity: marker cells are brighter than the wall cells around them.
+  LayerCells reflectivity(http, "floor", "reflectivity");
+  double marker_sum = 0.0, wall_sum = 0.0;
+  int marker_n = 0, wall_n = 0;
+  const auto cellOf = [&](double v) { return static_cast<int>(std::floor(v / r)); };
+  for (const Eigen::AlignedBox3d& m : layout.markers) {
+    // The marker faces the corridor; walls lie on the same line beyond its ends.
+    const double y = m.center().y();
+    for (double x = m.min().x() - 1.0; x < m.max().x() + 1.0; x += r) {
+      const bool on_marker = x > m.min().x() + 2 * r && x < m.max().x() - 2 * r;
+      const bool off_marker = x < m.min().x() - 3 * r || x > m.max().x() + 3 * r;
+      if (!on_marker && !off_marker) continue;
+      // The brightest cell across the wall's thickness at this x.
+      int best = -1;
+      for (int dy = -2; dy <= 2; ++dy) {
+        const auto [grey, alpha] = reflectivity.at(cellOf(x), cellOf(y) + dy);
+        if (alpha == 255) best = std::max(best, int{grey});
+      }
+      if (best < 0) continue;
+      (on_marker ? marker_sum : wall_sum) += best;
+      ++(on_marker ? marker_n : wall_n);
+    }
+  }
+  ASSERT_GT(marker_n, 10);
+  ASSERT_GT(wall_n, 10);
+  std::printf("[ reflectivity ] markers %.1f (%d cells), walls %.1f (%d cells) of 255\n", marker_sum / marker_n,
+              marker_n, wall_sum / wall_n, wall_n);
+  // Markers are ρ 0.95, the corridor walls 0.45–0.80.
+  EXPECT_GT(marker_sum / marker_n, 1.2 * wall_sum / wall_n);
+
+  // map_server export: the same occupancy as the tiles, pixel for pixel.
+  const client::HttpResponse yaml_response = http.get("/v1/maps/floor/grid2d.yaml");
+  ASSERT_EQ(yaml_response.status, 200);
+  const std::map<std::string, std::string> yaml = parseYaml(yaml_response.body);
+  EXPECT_EQ(yaml.at("image"), "grid2d.pgm");
+  EXPECT_DOUBLE_EQ(std::stod(yaml.at("resolution")), r);
+  EXPECT_EQ(yaml.at("negate"), "0");
+  EXPECT_EQ(yaml.at("occupied_thresh"), "0.65");
+  EXPECT_EQ(yaml.at("free_thresh"), "0.196");
+  double origin_x = 0, origin_y = 0;
+  ASSERT_EQ(std::sscanf(yaml.at("origin").c_str(), "[%lf, %lf", &origin_x, &origin_y), 2);
+  const client::HttpResponse pgm = http.get("/v1/maps/floor/grid2d.pgm");
+  ASSERT_EQ(pgm.status, 200);
+  int width = 0, height = 0, maxval = 0, header = 0;
+  ASSERT_EQ(std::sscanf(pgm.body.c_str(), "P5\n%d %d\n%d\n%n", &width, &height, &maxval, &header), 3);
+  ASSERT_EQ(maxval, 255);
+  ASSERT_EQ(pgm.body.size(), static_cast<size_t>(header + width * height));
+  EXPECT_NEAR(origin_x, info["known_bounds"]["min"][0].get<double>(), 1e-9);
+  EXPECT_NEAR(origin_x + width * r, info["known_bounds"]["max"][0].get<double>(), 1e-9);
+  EXPECT_NEAR(origin_y + height * r, info["known_bounds"]["max"][1].get<double>(), 1e-9);
+  LayerCells occupancy(http, "floor", "occupancy");
+  const int x0 = static_cast<int>(std::lround(origin_x / r)), y0 = static_cast<int>(std::lround(origin_y / r));
+  size_t checked = 0, occupied = 0, mismatched = 0;
+  for (int row = 0; row < height; ++row) {
+    for (int col = 0; col < width; ++col) {
+      const uint8_t value = static_cast<uint8_t>(pgm.body[header + row * width + col]);
+      const auto [grey, alpha] = occupancy.at(x0 + col, y0 + height - 1 - row);
+      const double p = 1.0 - grey / 255.0;
+      uint8_t expected = 205;
+      if (alpha == 255 && p >= 0.655) expected = 0;
+      if (alpha == 255 && p <= 0.19) expected = 254;
+      const bool near_threshold = alpha == 255 && (std::abs(p - 0.65) < 0.006 || std::abs(p - 0.196) < 0.006);
+      if (near_threshold) continue;  // the tile's 8-bit grey cannot tell these apart
+      ++checked;
+      occupied += value == 0;
+      mismatched += value != expected;
+    }
+  }
+  EXPECT_EQ(mismatched, 0u) << "of " << checked;
+  EXPECT_GT(occupied, 200u);
+
+  // Caching: the same version answers 304.
+  const client::HttpResponse tile = http.get("/v1/maps/floor/layers/occupancy/0/0/0.png");
+  ASSERT_EQ(tile.status, 200);
+  EXPECT_EQ(http.get("/v1/maps/floor/layers/occupancy/0/0/0.png", {{"If-None-Match", tile.header("etag")}}).status,
+            304);
+
+  // Bad layer requests.
+  for (const char* target : {"/v1/maps/floor/layers/occupancy/11/0/0.png", "/v1/maps/floor/layers/occupancy/1/2/0.png",
+                             "/v1/maps/floor/layers/occupancy/1/0/-1.png", "/v1/maps/floor/layers/occupancy/a/0/0.png",
+                             "/v1/maps/floor/layers/occupancy/0/0/0"}) {
+    const client::HttpResponse bad = http.get(target);
+    EXPECT_EQ(bad.status, 400) << target;
+    EXPECT_EQ(nlohmann::json::parse(bad.body)["error"]["code"], "invalid_argument") << target;
+  }
+  EXPECT_EQ(http.get("/v1/maps/floor/layers/height/0/0/0.png").status, 404);
+  EXPECT_EQ(nlohmann::json::parse(http.get("/v1/maps/nope/layers/occupancy/0/0/0.png").body)["error"]["code"],
+            "map_not_found");
+  {
+    client::RobotClientOptions plain;
+    plain.server_url = rmapd->wsUrl();
+    plain.hello.set_robot_id("cloud-only");
+    plain.hello.set_map("no-laser");
+    client::RobotClient other(plain);
+    other.connect();  // creates the map, which has no 2D layer
+  }
+  for (const char* target : {"/v1/maps/no-laser/layers", "/v1/maps/no-laser/layers/occupancy/0/0/0.png",
+                             "/v1/maps/no-laser/grid2d.pgm", "/v1/maps/no-laser/grid2d.yaml"}) {
+    const client::HttpResponse none = http.get(target);
+    EXPECT_EQ(none.status, 404) << target;
+    EXPECT_EQ(nlohmann::json::parse(none.body)["error"]["code"], "layer_not_found") << target;
+  }
+  const std::string metrics = http.get("/metrics").body;
+  EXPECT_EQ(metricValue(metrics, "rmap_slam2d_scans_total"), static_cast<double>(truth.size()));
+  EXPECT_EQ(metricValue(metrics, "rmap_pose_estimates_sent_total"), static_cast<double>(truth.size()));
+
+  // kill -9 and restart: the replayed log rebuilds the same 2D map.
+  const std::string pgm_before = pgm.body;
+  const uint64_t version_before = info["version"].get<uint64_t>();
+  rmapd->kill9();
+  rmapd.reset();
+  rmapd = std::make_unique<RmapdProcess>(dir.path() / "data");
+  client::HttpClient again(rmapd->httpUrl());
+  const nlohmann::json replayed = getJson(again, "/v1/maps/floor/layers");
+  EXPECT_EQ(replayed["version"].get<uint64_t>(), version_before);
+  EXPECT_EQ(replayed["scans"].get<size_t>(), truth.size());
+  EXPECT_TRUE(again.get("/v1/maps/floor/grid2d.pgm").body == pgm_before);
+}
+
+}  // namespace
+}  // namespace rmap::testing
