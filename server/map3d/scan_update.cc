@@ -114,42 +114,49 @@ void ScanUpdate::walkBack(double resolution_m, const Eigen::Vector3f& origin_m, 
   setUp(0, tx, dtx, sx);
   setUp(1, ty, dty, sy);
   setUp(2, tz, dtz, sz);
-  // The cell is tracked as its block and its coordinates inside the block, so
-  // a step costs an add and a wrap test, and the block is looked up only when
-  // the walk crosses into another one.
+  // The cell is tracked as its block and its index inside the block (x in
+  // bits 0-3, y in 4-7, z in 8-11), so a step is an add to that index; the
+  // step leaves the block when it flips the bit above its axis' four, and only
+  // then is the block looked up.
   int32_t bx = end_cell.x >> kBlockShift, by = end_cell.y >> kBlockShift, bz = end_cell.z >> kBlockShift;
-  constexpr int kLast = kBlockEdge - 1;
-  int lx = end_cell.x & kLast, ly = end_cell.y & kLast, lz = end_cell.z & kLast;
+  int i = localIndex(end_cell);
+  const int step_x = sx, step_y = sy * kBlockEdge, step_z = sz * kBlockEdge * kBlockEdge;
+  constexpr int kXBits = kBlockEdge - 1, kYBits = kXBits << kBlockShift, kZBits = kYBits << kBlockShift;
   uint64_t* free_words = end_marks.free.words.data();
   const int run_cap_left = longest_run * kCellsLeftPerRunCell;
   int freed_run = 0;
   while (--left > 0) {
     if (tx < ty && tx < tz) {
       tx += dtx;
-      lx += sx;
-      if (static_cast<unsigned>(lx) > kLast) {
-        lx &= kLast;
+      const int moved = i + step_x;
+      if ((moved ^ i) & (kXBits + 1)) {
+        i = (i & ~kXBits) | (moved & kXBits);
         bx += sx;
         free_words = marksOf({bx, by, bz}).free.words.data();
+      } else {
+        i = moved;
       }
     } else if (ty < tz) {
       ty += dty;
-      ly += sy;
-      if (static_cast<unsigned>(ly) > kLast) {
-        ly &= kLast;
+      const int moved = i + step_y;
+      if ((moved ^ i) & (kYBits + kBlockEdge)) {
+        i = (i & ~kYBits) | (moved & kYBits);
         by += sy;
         free_words = marksOf({bx, by, bz}).free.words.data();
+      } else {
+        i = moved;
       }
     } else {
       tz += dtz;
-      lz += sz;
-      if (static_cast<unsigned>(lz) > kLast) {
-        lz &= kLast;
+      const int moved = i + step_z;
+      if ((moved ^ i) & (kZBits + kBlockEdge * kBlockEdge)) {
+        i = (i & ~kZBits) | (moved & kZBits);
         bz += sz;
         free_words = marksOf({bx, by, bz}).free.words.data();
+      } else {
+        i = moved;
       }
     }
-    const int i = localIndex(lx, ly, lz);
     uint64_t& word = free_words[i >> 6];
     const uint64_t bit = uint64_t{1} << (i & 63);
     if (!(word & bit)) {
