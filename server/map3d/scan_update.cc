@@ -15,6 +15,16 @@ namespace {
 constexpr int kCellsLeftPerRunCell = 4;
 constexpr int kShortestRun = 2;
 
+/// The rule above, checked at every cell of a run, solved once when the run
+/// starts `left` cells before the sensor: the length k of the run that stops
+/// the walk is the smallest k with
+/// k >= clamp((left - k + 1) / kCellsLeftPerRunCell, kShortestRun, longest_run).
+int stoppingRun(int left, int longest_run) {
+  constexpr int d = kCellsLeftPerRunCell;
+  const int k = left + 1 < d ? 1 : (left + 1 - d) / (d + 1) + 1;
+  return std::max(kShortestRun, std::min(longest_run, k));
+}
+
 }  // namespace
 
 uint32_t ScanUpdate::slotOf(const BlockKey& key) {
@@ -123,8 +133,8 @@ void ScanUpdate::walkBack(double resolution_m, const Eigen::Vector3f& origin_m, 
   const int step_x = sx, step_y = sy * kBlockEdge, step_z = sz * kBlockEdge * kBlockEdge;
   constexpr int kXBits = kBlockEdge - 1, kYBits = kXBits << kBlockShift, kZBits = kYBits << kBlockShift;
   uint64_t* free_words = end_marks.free.words.data();
-  const int run_cap_left = longest_run * kCellsLeftPerRunCell;
   int freed_run = 0;
+  int stop_run = 0;
   while (--left > 0) {
     if (tx < ty && tx < tz) {
       tx += dtx;
@@ -166,8 +176,8 @@ void ScanUpdate::walkBack(double resolution_m, const Eigen::Vector3f& origin_m, 
     }
     // Close to the sensor a shorter run suffices: what is left of the walk is
     // short and crowded by other rays (measured in docs/BENCHMARKS.md).
-    const int run = left >= run_cap_left ? longest_run : std::max(kShortestRun, left / kCellsLeftPerRunCell);
-    if (++freed_run >= run) return;
+    if (freed_run == 0) stop_run = stoppingRun(left, longest_run);
+    if (++freed_run >= stop_run) return;
   }
 }
 
