@@ -206,8 +206,8 @@ void CuboidMap::applyUpdate(const ScanUpdate& update, int threads) {
     // Word by word, so the known bits are read and written once per 64 cells.
     // Same float arithmetic as OctoMap: new cells start at 0, add, then clamp.
     for (int w = 0; w < kBlockWords; ++w) {
-      const uint64_t free = job.marks->free.words[w], occupied = job.marks->occupied.words[w];
-      if (!(free | occupied)) continue;
+      const uint64_t freed = job.marks->free.words[w], hit_bits = job.marks->occupied.words[w];
+      if (!(freed | hit_bits)) continue;
       const uint64_t known = cells.known.words[w];
       float* values = &cells.log_odds[w << 6];
       auto apply = [&](uint64_t bits, float delta) {
@@ -217,9 +217,9 @@ void CuboidMap::applyUpdate(const ScanUpdate& update, int threads) {
           values[b] = std::clamp(v + delta, lo, hi);
         }
       };
-      apply(free, miss);
-      apply(occupied, hit);
-      cells.known.words[w] = known | free | occupied;
+      apply(freed, miss);
+      apply(hit_bits, hit);
+      cells.known.words[w] = known | freed | hit_bits;
     }
     block.last_update_scan = scans_;
     block.version = version_;
