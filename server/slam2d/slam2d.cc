@@ -60,6 +60,7 @@ void Slam2dOptions::validate() const {
   require(matcher.coarse_iterations >= 0 && matcher.fine_iterations >= 0, "matcher iterations must be ≥ 0");
   require(matcher.damping >= 0.0 && matcher.max_step_cells > 0.0 && matcher.max_step_rad > 0.0,
           "matcher damping ≥ 0 and step bounds > 0");
+  incidence.validate();  // else a bad option would only throw at the first scan with intensities
 }
 
 Slam2d::Slam2d(Slam2dOptions options)
@@ -214,7 +215,8 @@ Pose2 Slam2d::addScan(const std::string& trajectory, const LaserScan& scan, cons
   }
   track.last_increment = is_new ? Pose2{} : between(track.pose, estimate);
   track.pose = estimate;
-  if (odometry) track.odometry = *odometry;
+  // A scan without odometry breaks the chain: the next step cannot be measured from older odometry.
+  track.odometry = odometry;
   trajectories_[trajectory] = track;
   return estimate;
 }

@@ -131,7 +131,7 @@ class Slam2d {
  private:
   struct Trajectory {
     Pose2 pose;
-    std::optional<Pose2> odometry;  ///< at the last scan
+    std::optional<Pose2> odometry;  ///< at the last scan (none when it came without)
     Pose2 last_increment;           ///< motion of the last scan, the prediction without odometry
     Pose2 last_update_pose;         ///< pose at the last map update
   };
