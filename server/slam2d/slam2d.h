@@ -91,12 +91,12 @@ struct Slam2dOptions {
   /// worse than the trajectory's recent matches — its mean residual 1 − M
   /// above their running mean by more than relock_residual_margin (≤ 0: off)
   /// — the match is repeated with a search over ±relock_search_rad and
-  /// ±relock_search_m around the prediction, and the better fit is kept.
-  /// Raw fr079 over a grid of nearby settings (iterations, levels, resolution
-  /// 0.04, point spacing): relation error 0.036–0.70 m without, 0.036–0.038 m
-  /// with; raw intel 0.020–0.113 without, 0.018–0.053 with (its failures are
-  /// loop drift beyond any local search, see docs/BENCHMARKS.md §4). It runs
-  /// on about a fifth of intel's scans.
+  /// ±relock_search_m around the prediction; the searched pose is kept when it
+  /// fits better and within the margin of the recent matches. Raw fr079 over
+  /// a grid of nearby settings (iterations, levels, resolution 0.04, point
+  /// spacing): relation error 0.036–0.70 m without, 0.036–0.038 m with. Raw
+  /// intel stays 0.02–0.11 either way (loop drift beyond any local search,
+  /// see docs/BENCHMARKS.md §4).
   double relock_residual_margin = 0.02;
   double relock_search_rad = 0.2;
   double relock_search_m = 0.2;
