@@ -50,9 +50,10 @@ TEST(Laser2dRobot, DrivesTheTourForthAndBackWithTheMountedLaser) {
   EXPECT_DOUBLE_EQ(sensor.mount().position_m().x(), 0.15);
   EXPECT_DOUBLE_EQ(sensor.mount().position_m().z(), 1.0);
 
-  // Laser x: 0, 0.3, 0.6, then back 0.3, 0 facing −x, then 0.3 facing +x again.
+  // Laser x: 0, 0.3, 0.6, back to 0.3 facing −x, then 0, 0.3 facing +x again
+  // (the ends turn round while stepping off them).
   const double laser_x[] = {0.0, 0.3, 0.6, 0.3, 0.0, 0.3};
-  const double yaw[] = {0.0, 0.0, 0.0, std::numbers::pi, std::numbers::pi, 0.0};
+  const double yaw[] = {0.0, 0.0, 0.0, std::numbers::pi, 0.0, 0.0};
   for (int k = 0; k < 6; ++k) {
     const Laser2dStep step = robot.next();
     const double base_x = laser_x[k] - 0.15 * std::cos(yaw[k]);
