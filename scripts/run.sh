@@ -36,10 +36,9 @@ if [ "$laser2d_robots" -gt 0 ]; then
   echo "  ${url}v1/maps/sim/layers  ${url}v1/maps/sim/layers/reflectivity/8/{x}/{y}.png  ${url}v1/maps/sim/grid2d.pgm"
   echo "  rmap-sim prints the 2D robots' pose error against the truth once a second"
 fi
-# Robots drive their tour again and again until stopped; one long run, since a
-# 2D-laser robot that reconnects starts its odometry afresh (restarts only
-# follow a failure).
+# Robots drive their tour again and again until stopped (2D-laser robots
+# resume where the server's log left them, so their odometry stays continuous).
 while kill -0 "${pids[0]}" 2>/dev/null; do
-  build/bin/rmap-sim --server "$ws" --robots "$robots" --laser2d-robots "$laser2d_robots" --duration 86400 --rate 5 ||
+  build/bin/rmap-sim --server "$ws" --robots "$robots" --laser2d-robots "$laser2d_robots" --duration 600 --rate 5 ||
     sleep 1
 done

@@ -46,7 +46,10 @@ void Laser2dRobotOptions::validate() const {
 
 Laser2dRobot::Laser2dRobot(const sim::VoxelWorld& world, std::vector<Eigen::Isometry3d> laser_tour,
                            Laser2dRobotOptions options, uint64_t seed)
-    : world_(&world), tour_(std::move(laser_tour)), options_(std::move(options)), rng_(seed) {
+    : world_(&world), tour_(std::move(laser_tour)), options_(std::move(options)) {
+  std::seed_seq odometry_seeds{seed, uint64_t{1}}, scan_seeds{seed, uint64_t{2}};
+  odometry_rng_.seed(odometry_seeds);
+  scan_rng_.seed(scan_seeds);
   options_.validate();
   if (tour_.empty()) throw std::invalid_argument("laser2d robot: the tour has no pose");
 }
@@ -71,26 +74,36 @@ Eigen::Isometry3d Laser2dRobot::tourPose(uint64_t step) const {
   return tour_[2 * (n - 1) - i] * Eigen::AngleAxisd(std::numbers::pi, Eigen::Vector3d::UnitZ());
 }
 
-Laser2dStep Laser2dRobot::next() {
-  Laser2dStep out;
-  out.laser_pose_world = tourPose(step_);
+Eigen::Isometry3d Laser2dRobot::drive() {
+  const Eigen::Isometry3d laser_pose = tourPose(step_);
   const Eigen::Vector3d mount_inverse(-options_.mount_forward_m, 0.0, 0.0);
-  out.base_truth = compose(planar(out.laser_pose_world), mount_inverse);
+  const Eigen::Vector3d truth = compose(planar(laser_pose), mount_inverse);
   if (step_ == 0) {
-    odometry_ = out.base_truth;  // odometry in the map frame: the SLAM's frame is the world's
+    odometry_ = truth;  // odometry in the map frame: the SLAM's frame is the world's
   } else {
     std::normal_distribution<double> unit(0.0, 1.0);
-    const Eigen::Vector3d motion = between(last_truth_, out.base_truth);
+    const Eigen::Vector3d motion = between(last_truth_, truth);
     const double d = motion.head<2>().norm();
-    const Eigen::Vector3d measured(motion.x() * (1 + options_.odometry_forward_sigma * unit(rng_)),
-                                   motion.y() + options_.odometry_lateral_sigma_per_m * d * unit(rng_),
-                                   motion.z() + options_.odometry_heading_sigma_rad * unit(rng_));
+    const double forward = unit(odometry_rng_), lateral = unit(odometry_rng_), heading = unit(odometry_rng_);
+    const Eigen::Vector3d measured(motion.x() * (1 + options_.odometry_forward_sigma * forward),
+                                   motion.y() + options_.odometry_lateral_sigma_per_m * d * lateral,
+                                   motion.z() + options_.odometry_heading_sigma_rad * heading);
     odometry_ = compose(odometry_, measured);
   }
-  last_truth_ = out.base_truth;
+  last_truth_ = truth;
   ++step_;
+  return laser_pose;
+}
 
-  const sim::Laser2dScan scan = sim::simulateLaser2d(*world_, out.laser_pose_world, options_.laser, rng_);
+void Laser2dRobot::skip(uint64_t steps) {
+  for (uint64_t k = 0; k < steps; ++k) drive();
+}
+
+Laser2dStep Laser2dRobot::next() {
+  Laser2dStep out;
+  out.laser_pose_world = drive();
+  out.base_truth = last_truth_;
+  const sim::Laser2dScan scan = sim::simulateLaser2d(*world_, out.laser_pose_world, options_.laser, scan_rng_);
   rmap::v1::LaserScan2D& m = out.scan;
   m.set_sensor(options_.sensor_name);
   m.set_angle_min_rad(scan.angle_min_rad);

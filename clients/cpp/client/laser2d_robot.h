@@ -47,7 +47,8 @@ class Laser2dRobot {
   ///        above the floor, e.g. from sim::planTrajectory); driven forwards,
   ///        then backwards facing the other way, and so on, so the motion
   ///        (and the odometry) stays continuous however many steps are taken
-  /// @param seed  odometry and sensor noise (deterministic in it)
+  /// @param seed  odometry and sensor noise (deterministic in it; the two
+  ///        come from separate streams, so skip() needs no scan)
   /// @throws std::invalid_argument for bad options or an empty tour
   Laser2dRobot(const sim::VoxelWorld& world, std::vector<Eigen::Isometry3d> laser_tour, Laser2dRobotOptions options,
                uint64_t seed);
@@ -60,15 +61,23 @@ class Laser2dRobot {
   /// later one adds the true motion with drift.
   Laser2dStep next();
 
+  /// Drives `steps` steps without scanning: a robot resuming after a restart
+  /// whose first steps the server already holds continues from there, with
+  /// the same odometry as if it had never stopped.
+  void skip(uint64_t steps);
+
   uint64_t steps() const { return step_; }
 
  private:
   Eigen::Isometry3d tourPose(uint64_t step) const;
+  /// Moves to the next tour pose, integrating odometry; returns the laser pose.
+  Eigen::Isometry3d drive();
 
   const sim::VoxelWorld* world_;  ///< not owned; outlives the robot
   std::vector<Eigen::Isometry3d> tour_;
   Laser2dRobotOptions options_;
-  std::mt19937_64 rng_;
+  std::mt19937_64 odometry_rng_;
+  std::mt19937_64 scan_rng_;
   uint64_t step_ = 0;
   Eigen::Vector3d last_truth_ = Eigen::Vector3d::Zero();
   Eigen::Vector3d odometry_ = Eigen::Vector3d::Zero();

@@ -241,7 +241,11 @@ void runRobot(const SimScene& scene, const SimFeedOptions& o, int index, RobotPl
 
     // A single sender: sequence numbers follow Welcome::last_durable_seq one by one,
     // so each message's record is filed before its estimate or ack can arrive.
-    uint64_t next_seq = client.connect().last_durable_seq() + 1;
+    const uint64_t durable = client.connect().last_durable_seq();
+    uint64_t next_seq = durable + 1;
+    // A 2D-laser robot sends one scan per step, numbered from 1: one the
+    // server already holds steps resumes its tour (and odometry) after them.
+    if (plan.laser2d) plan.laser2d->skip(durable);
     const auto period = o.rate_hz > 0 ? std::chrono::duration_cast<Clock::duration>(
                                             std::chrono::duration<double>(1.0 / o.rate_hz))
                                       : Clock::duration::zero();

@@ -5,7 +5,9 @@
 /// lidar cloud (map frame, with intensities) per pose; 2D-laser robots
 /// (Laser2dRobot) drive the ground storey and send LaserScan2D messages with
 /// intensities and drifting odometry, and the PoseEstimates the server's 2D
-/// SLAM returns are scored against the truth. Used by rmap-sim, by
+/// SLAM returns are scored against the truth. A 2D-laser robot whose Welcome
+/// says the server holds N of its messages resumes its tour at step N (same
+/// seed and poses: the odometry goes on as if it had never stopped). Used by rmap-sim, by
 /// `rmap-bench server` and by the integration tests.
 
 #include <chrono>

@@ -98,6 +98,20 @@ TEST(Laser2dRobot, OdometryDriftsDeterministicallyInTheSeed) {
   EXPECT_LT(drift_m, 0.5);
 }
 
+TEST(Laser2dRobot, SkipResumesTheTourWithTheSameOdometry) {
+  const sim::VoxelWorld world = room();
+  Laser2dRobot straight(world, line(), {}, 3), resumed(world, line(), {}, 3);
+  std::vector<Laser2dStep> steps;
+  for (int k = 0; k < 7; ++k) steps.push_back(straight.next());
+  resumed.skip(5);
+  EXPECT_EQ(resumed.steps(), 5u);
+  for (int k = 5; k < 7; ++k) {
+    const Laser2dStep step = resumed.next();
+    EXPECT_EQ(step.scan.odometry().SerializeAsString(), steps[k].scan.odometry().SerializeAsString()) << k;
+    EXPECT_TRUE(step.base_truth.isApprox(steps[k].base_truth)) << k;
+  }
+}
+
 TEST(Laser2dRobot, RejectsBadInput) {
   const sim::VoxelWorld world = room();
   EXPECT_THROW(Laser2dRobot(world, {}, {}, 1), std::invalid_argument);

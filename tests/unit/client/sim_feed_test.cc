@@ -269,6 +269,24 @@ TEST(SimFeed, LaserRobotsSendScansWithOdometryAndScoreTheirPoses) {
     EXPECT_EQ(again_scans[k].odometry().SerializeAsString(), scans[k].odometry().SerializeAsString());
     EXPECT_TRUE(std::equal(scans[k].ranges_m().begin(), scans[k].ranges_m().end(), again_scans[k].ranges_m().begin()));
   }
+
+  // A robot the server already holds 4 messages of resumes at its fifth step.
+  FakeRobotServerOptions holding = with_poses;
+  holding.last_durable_seq = 4;
+  FakeRobotServer resume_server(holding);
+  SimFeedOptions resume = o;
+  resume.server_url = resume_server.url();
+  resume.max_clouds = 2;
+  EXPECT_TRUE(runSimFeed(scene(), resume).errors.empty());
+  std::vector<v1::RobotMessage> resumed;
+  for (const v1::RobotMessage& m : resume_server.messages()) {
+    if (m.has_scan()) resumed.push_back(m);
+  }
+  ASSERT_EQ(resumed.size(), 2u);
+  for (size_t k = 0; k < 2; ++k) {
+    EXPECT_EQ(resumed[k].seq(), 5 + k);
+    EXPECT_EQ(resumed[k].scan().odometry().SerializeAsString(), scans[4 + k].odometry().SerializeAsString()) << k;
+  }
 }
 
 TEST(SimFeed, LaserRobotsAloneNeedNoLidarRobot) {
