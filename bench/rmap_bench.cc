@@ -81,6 +81,10 @@ int main(int argc, char** argv) {
   d->add_option("--odometry-information-xy", slam2d.slam.odometry_information_xy, "odometry prior weight, 1/m^2");
   d->add_option("--odometry-information-theta", slam2d.slam.odometry_information_theta, "odometry prior weight, 1/rad^2");
   d->add_option("--reflectivity-weight", slam2d.slam.reflectivity_weight, "weight of the reflectivity residual");
+  d->add_option("--match-point-spacing", slam2d.slam.match_point_spacing_m, "spacing of the matched endpoints, metres");
+  d->add_option("--coarse-iterations", slam2d.slam.matcher.coarse_iterations, "Gauss-Newton iterations per coarse level");
+  d->add_option("--fine-iterations", slam2d.slam.matcher.fine_iterations, "Gauss-Newton iterations on the finest level");
+  d->add_option("--relock-margin", slam2d.slam.relock_residual_margin, "match residual above the recent mean that triggers a search (<= 0: off)");
   rmap::bench::CalibrationEvalOptions calib;
   calib.lidar_pair_dir = std::string(RMAP_SHARED_DATA_DIR) + "/lidar-intensity/small-gicp-pair";
   CLI::App* c = app.add_subcommand("calib", "2D laser intensity calibration on both simulated scanners, real lidar check");

@@ -14,6 +14,7 @@ packages=(
   libprotobuf-dev protobuf-compiler libsqlite3-dev libyaml-cpp-dev
   libpng-dev  # PNG raster tiles of the 2D layers
   chromium  # the browser tests of the viewer (tests/browser)
+  jq        # bench/*_matrix.sh collect the benchmarks' JSON into tables
 )
 # Node.js and npm fetch and test the viewer. Debian's packages only when there is no npm:
 # over a NodeSource nodejs (which ships its own npm) they would conflict.

@@ -242,8 +242,12 @@ int runSlam2dBench(const Slam2dBenchOptions& options) {
               ref_rel.translation_m.std, ref_rel.rotation_rad.mean * kDegPerRad, ref_rel.rotation_rad.std * kDegPerRad);
   std::printf("ATE vs %s: %.4f m; RPE over %.1f m: %.4f m (%zu pairs)\n", data.reference_kind.c_str(), ate.rmse,
               options.rpe_distance_m, rpe.translation_m.rmse, rpe.translation_m.count);
-  std::printf("SLAM %.3f s wall, %.3f s CPU; data %.1f s; %.0fx real time\n", run.wall_s, run.cpu_s,
-              orNan(data.duration_s), realtime);
+  if (data.duration_s)
+    std::printf("SLAM %.3f s wall, %.3f s CPU; data %.1f s; %.0fx real time (%.0fx on CPU time)\n", run.wall_s,
+                run.cpu_s, *data.duration_s, realtime, *data.duration_s / run.cpu_s);
+  else
+    std::printf("SLAM %.3f s wall, %.3f s CPU; no real-time factor: the log's stamps do not measure time\n",
+                run.wall_s, run.cpu_s);
   if (data.simulated) {
     std::printf("ATE vs truth %.4f m; reflectivity: median rel. error %.3f (scale %.3f, %zu cells), spread raw %.3f "
                 "vs calibrated %.3f\n",

@@ -95,9 +95,12 @@ class Grid {
   template <class Scalar>
   bool cellChecked(const Eigen::Matrix<Scalar, 3, 1>& p, CellKey& out) const {
     for (int a = 0; a < 3; ++a) {
-      const double scaled = std::floor(inv_resolution_ * static_cast<double>(p[a]));
+      const double scaled = inv_resolution_ * static_cast<double>(p[a]);
       if (!(scaled >= -kCellLimit && scaled < kCellLimit)) return false;  // also rejects NaN
-      out[a] = static_cast<int32_t>(scaled);
+      // floor(scaled) in range, without a libm call (the baseline x86-64 ISA
+      // has no rounding instruction): truncate, step down below zero
+      const int32_t truncated = static_cast<int32_t>(scaled);
+      out[a] = truncated - (scaled < truncated ? 1 : 0);
     }
     return true;
   }

@@ -1,6 +1,7 @@
 #include "map3d/cuboid_map.h"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <mutex>
 #include <stdexcept>
@@ -202,15 +203,24 @@ void CuboidMap::applyUpdate(const ScanUpdate& update, int threads) {
     Block& block = *job.block;
     if (job.fill) fillFromCuboids(block);
     DenseCells& cells = *block.dense;
+    // Word by word, so the known bits are read and written once per 64 cells.
     // Same float arithmetic as OctoMap: new cells start at 0, add, then clamp.
-    auto apply = [&](int i, float delta) {
-      float v = cells.known.test(i) ? cells.log_odds[i] : 0.0f;
-      v += delta;
-      cells.log_odds[i] = std::clamp(v, lo, hi);
-      cells.known.set(i);
-    };
-    job.marks->free.forEach([&](int i) { apply(i, miss); });
-    job.marks->occupied.forEach([&](int i) { apply(i, hit); });
+    for (int w = 0; w < kBlockWords; ++w) {
+      const uint64_t freed = job.marks->free.words[w], hit_bits = job.marks->occupied.words[w];
+      if (!(freed | hit_bits)) continue;
+      const uint64_t known = cells.known.words[w];
+      float* values = &cells.log_odds[w << 6];
+      auto apply = [&](uint64_t bits, float delta) {
+        for (; bits; bits &= bits - 1) {
+          const int b = std::countr_zero(bits);
+          const float v = (known >> b) & 1 ? values[b] : 0.0f;
+          values[b] = std::clamp(v + delta, lo, hi);
+        }
+      };
+      apply(freed, miss);
+      apply(hit_bits, hit);
+      cells.known.words[w] = known | freed | hit_bits;
+    }
     block.last_update_scan = scans_;
     block.version = version_;
   });

@@ -50,20 +50,41 @@ class ScanUpdate {
   ScanStats& stats() { return stats_; }
 
  private:
-  /// Consecutive cells of a ray mostly share a block: the hash lookup runs
-  /// only when the block changes.
+  /// Consecutive cells of a ray mostly share a block, and so do the end
+  /// cells of consecutive rays: each keeps its last block, and the hash
+  /// lookup runs only when the block changes.
   BlockMarks& marksOf(const BlockKey& key) {
-    if (key == last_key_) return blocks_[last_slot_];
-    return lookUp(key);
+    if (!(key == last_key_)) {
+      last_key_ = key;
+      last_slot_ = slotOf(key);
+    }
+    return blocks_[last_slot_];
   }
-  BlockMarks& lookUp(const BlockKey& key);
+  BlockMarks& endMarksOf(const BlockKey& key) {
+    if (!(key == end_key_)) {
+      end_key_ = key;
+      end_slot_ = slotOf(key);
+    }
+    return blocks_[end_slot_];
+  }
+  /// Slot of a block's marks in blocks_, added when missing.
+  uint32_t slotOf(const BlockKey& key);
+  /// FreeSpaceTracing::kStopAtFreed: frees the cells between a ray's end cell
+  /// and the sensor's cell (both excluded), walking back from the end until a
+  /// run of cells earlier rays freed shows that the paths have merged.
+  /// @param end_cell, origin_cell  the cells of end_m and origin_m, different
+  /// @param end_marks  the marks of end_cell's block
+  void walkBack(double resolution_m, const Eigen::Vector3f& origin_m, const CellKey& origin_cell,
+                const Eigen::Vector3f& end_m, const CellKey& end_cell, BlockMarks& end_marks, int longest_run);
   void markFree(const CellKey& c) { marksOf(blockOf(c)).free.set(localIndex(c)); }
-  void markOccupied(const CellKey& c) { marksOf(blockOf(c)).occupied.set(localIndex(c)); }
+  void markOccupied(const CellKey& c) { endMarksOf(blockOf(c)).occupied.set(localIndex(c)); }
 
   std::vector<BlockMarks> blocks_;
   BlockIndex index_;
   BlockKey last_key_{INT32_MIN, INT32_MIN, INT32_MIN};
   uint32_t last_slot_ = 0;
+  BlockKey end_key_{INT32_MIN, INT32_MIN, INT32_MIN};
+  uint32_t end_slot_ = 0;
   ScanStats stats_;
 };
 

@@ -58,13 +58,18 @@ void validate(const LaserScan& scan, const IncidenceOptions& o) {
     fail("angles_rad has " + std::to_string(scan.angles_rad.size()) + " entries, ranges_m " +
          std::to_string(scan.ranges_m.size()));
   }
-  if (!(o.window_m > 0.0) || !std::isfinite(o.window_m)) fail("window_m must be > 0");
-  if (o.max_neighbours < 1) fail("max_neighbours must be ≥ 1");
-  if (!(o.max_incidence_deg > 0.0 && o.max_incidence_deg < 90.0)) fail("max_incidence_deg must be in (0, 90)");
-  if (!(o.range_sigma_m > 0.0) || !std::isfinite(o.range_sigma_m)) fail("range_sigma_m must be > 0");
+  o.validate();
 }
 
 }  // namespace
+
+void IncidenceOptions::validate() const {
+  auto fail = [](const std::string& what) { throw std::invalid_argument("IncidenceOptions: " + what); };
+  if (!(window_m > 0.0) || !std::isfinite(window_m)) fail("window_m must be > 0");
+  if (max_neighbours < 1) fail("max_neighbours must be ≥ 1");
+  if (!(max_incidence_deg > 0.0 && max_incidence_deg < 90.0)) fail("max_incidence_deg must be in (0, 90)");
+  if (!(range_sigma_m > 0.0) || !std::isfinite(range_sigma_m)) fail("range_sigma_m must be > 0");
+}
 
 std::vector<float> cosIncidence(const LaserScan& scan, const IncidenceOptions& options) {
   validate(scan, options);

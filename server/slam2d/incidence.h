@@ -34,6 +34,9 @@ struct IncidenceOptions {
   /// Range noise of the scanner (1σ), metres, > 0: breakpoint margin and
   /// tolerance of the line fit.
   double range_sigma_m = 0.015;
+
+  /// @throws std::invalid_argument naming the first bad option
+  void validate() const;
 };
 
 /// Per-beam cosine of the angle between the beam and the surface normal, in

@@ -87,6 +87,19 @@ struct Slam2dOptions {
   double search_after_large_step_m = 0.2;
   double search_odometry_step_m = 0.3;
   double search_odometry_step_rad = 0.2;
+  /// Re-locking: when a match (after a small odometry step, no search) fits
+  /// worse than the trajectory's recent matches — its mean residual 1 − M
+  /// above their running mean by more than relock_residual_margin (≤ 0: off)
+  /// — the match is repeated with a search over ±relock_search_rad and
+  /// ±relock_search_m around the prediction; the searched pose is kept when it
+  /// fits better and within the margin of the recent matches. Raw fr079 over
+  /// a grid of nearby settings (iterations, levels, resolution 0.04, point
+  /// spacing): relation error 0.036–0.70 m without, 0.036–0.038 m with. Raw
+  /// intel stays 0.02–0.11 either way (loop drift beyond any local search,
+  /// see docs/BENCHMARKS.md §4).
+  double relock_residual_margin = 0.02;
+  double relock_search_rad = 0.2;
+  double relock_search_m = 0.2;
   OccupancyUpdate occupancy;             ///< log-odds of hits and misses, clamping
   ScanMatcherOptions matcher;            ///< iterations, damping, step bounds (reflectivity weight set from above)
   IncidenceOptions incidence;            ///< per-beam incidence for the calibration
@@ -131,9 +144,10 @@ class Slam2d {
  private:
   struct Trajectory {
     Pose2 pose;
-    std::optional<Pose2> odometry;  ///< at the last scan
+    std::optional<Pose2> odometry;  ///< at the last scan (none when it came without)
     Pose2 last_increment;           ///< motion of the last scan, the prediction without odometry
     Pose2 last_update_pose;         ///< pose at the last map update
+    std::optional<double> match_residual;  ///< running mean of the matches' mean residual (see relock_*)
   };
 
   struct ScannerModel {

@@ -36,6 +36,9 @@ TEST(Map3dBench, SimulatedRunReportsConsistentFigures) {
   EXPECT_GE(r["agreement"].get<double>(), 0.99);
   EXPECT_NEAR(r["speedup"].get<double>(),
               r["octomap"]["insert_s"].get<double>() / r["rmap"]["insert_s"].get<double>(), 1e-9);
+  EXPECT_GT(r["rmap"]["insert_cpu_s"].get<double>(), 0.0);
+  EXPECT_NEAR(r["speedup_cpu"].get<double>(),
+              r["octomap"]["insert_cpu_s"].get<double>() / r["rmap"]["insert_cpu_s"].get<double>(), 1e-9);
   EXPECT_NEAR(r["memory_ratio"].get<double>(),
               r["rmap"]["memory_bytes"].get<double>() / r["octomap"]["memory_bytes"].get<double>(), 1e-9);
   EXPECT_LT(r["rmap"]["cuboids"].get<double>(), r["octomap"]["leaves"].get<double>());

@@ -2,7 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <random>
+#include <tuple>
 
 namespace rmap::map3d {
 namespace {
@@ -63,6 +65,52 @@ TEST(ScanUpdate, CountsRejectedPointsAndTruncatedRays) {
   EXPECT_EQ(update.stats().occupied_cells, 1u);
   // free: cells 0, 1 and 3 (up to the truncated end in cell 4); cell 2 holds the endpoint
   EXPECT_EQ(update.stats().free_cells, 3u);
+}
+
+// A ray alone in its scan never meets cells freed before, so the backward walk
+// runs from its end to the sensor: it frees a 6-connected path from the
+// sensor's cell to a neighbour of the end cell, one cell per unit of their
+// Manhattan distance, and almost always OctoMap's cells exactly (only
+// near-ties of cell borders can round the other way).
+TEST(ScanUpdate, BackwardWalkFreesTheWholeLoneRay) {
+  const Grid grid(0.1);
+  OccupancyParams exact_params;
+  exact_params.free_space_tracing = FreeSpaceTracing::kOctomapExact;
+  const Eigen::Vector3f origin(0.33f, -0.71f, 1.02f);
+  CellKey origin_cell;
+  ASSERT_TRUE(grid.cellChecked(origin, origin_cell));
+  auto freeCells = [&](const OccupancyParams& params, const Eigen::Vector3f& end) {
+    ScanUpdate update;
+    const std::vector<Eigen::Vector3f> points = {end};
+    update.gather(grid, params, origin, points);
+    update.resolve();
+    std::vector<CellKey> cells;
+    for (const BlockMarks& m : update.blocks()) m.free.forEach([&](int i) { cells.push_back(cellOf(m.key, i)); });
+    std::sort(cells.begin(), cells.end(), [](const CellKey& a, const CellKey& b) {
+      return std::tie(a.x, a.y, a.z) < std::tie(b.x, b.y, b.z);
+    });
+    return cells;
+  };
+  const auto ends = randomPoints(500, 3);
+  int same_as_exact = 0;
+  for (const Eigen::Vector3f& end : ends) {
+    CellKey end_cell;
+    ASSERT_TRUE(grid.cellChecked(end, end_cell));
+    const std::vector<CellKey> cells = freeCells(OccupancyParams{}, end);
+    const int distance = std::abs(end_cell.x - origin_cell.x) + std::abs(end_cell.y - origin_cell.y) +
+                         std::abs(end_cell.z - origin_cell.z);
+    ASSERT_EQ(static_cast<int>(cells.size()), distance);
+    // the path: each cell's distance to the end cell is one less than the one before, ending next to the end cell
+    std::vector<int> to_end;
+    for (const CellKey& c : cells) {
+      to_end.push_back(std::abs(c.x - end_cell.x) + std::abs(c.y - end_cell.y) + std::abs(c.z - end_cell.z));
+    }
+    std::sort(to_end.begin(), to_end.end());
+    for (int k = 0; k < distance; ++k) ASSERT_EQ(to_end[k], k + 1);
+    EXPECT_NE(std::find(cells.begin(), cells.end(), origin_cell), cells.end());
+    same_as_exact += cells == freeCells(exact_params, end);
+  }
+  EXPECT_GE(same_as_exact, 495);
 }
 
 }  // namespace
