@@ -1,5 +1,5 @@
-// A simulated robot with a 2D laser streams scans (intensities, noisy odometry)
-// into a real rmapd: the PoseEstimates it gets back follow the true path, the
+// A simulated robot with a 2D laser (client::Laser2dRobot, the sim feed's)
+// streams scans (intensities, noisy odometry) into a real rmapd: the PoseEstimates it gets back follow the true path, the
 // reflectivity tiles show the building's reflective markers, the map_server
 // export matches the occupancy tiles, and a kill -9 replays to the same map.
 #include <gtest/gtest.h>
@@ -8,40 +8,20 @@
 #include <cmath>
 #include <map>
 #include <mutex>
-#include <random>
 #include <sstream>
 
 #include "api_helpers.h"
 #include "client/http_client.h"
+#include "client/laser2d_robot.h"
 #include "client/robot_client.h"
 #include "rmapd_process.h"
 #include "sim/building.h"
-#include "sim/laser2d.h"
 #include "sim/trajectory.h"
 
 namespace rmap::testing {
 namespace {
 
 constexpr double kLaserHeight_m = 1.0;
-constexpr double kLaserForward_m = 0.15;  // laser ahead of the robot base
-
-/// Planar pose (x, y, yaw) of a level 3D pose.
-Eigen::Vector3d planar(const Eigen::Isometry3d& pose) {
-  const Eigen::Vector3d x_axis = pose.linear().col(0);
-  return {pose.translation().x(), pose.translation().y(), std::atan2(x_axis.y(), x_axis.x())};
-}
-
-Eigen::Vector3d compose(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
-  const double c = std::cos(a.z()), s = std::sin(a.z());
-  return {a.x() + c * b.x() - s * b.y(), a.y() + s * b.x() + c * b.y(), std::remainder(a.z() + b.z(), 2 * M_PI)};
-}
-
-Eigen::Vector3d between(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
-  const double c = std::cos(a.z()), s = std::sin(a.z());
-  const Eigen::Vector2d d = b.head<2>() - a.head<2>();
-  return {c * d.x() + s * d.y(), -s * d.x() + c * d.y(), std::remainder(b.z() - a.z(), 2 * M_PI)};
-}
-
 struct GreyAlpha {
   int width = 0, height = 0;
   std::vector<uint8_t> pixels;
@@ -103,31 +83,22 @@ TEST(Slam2dStream, ScansGetPoseEstimatesAndMakeTheTwoDimensionalLayers) {
   sim::BuildingLayout layout;
   sim::VoxelWorld world = sim::makeBuilding(building, 3, &layout);
   ASSERT_FALSE(layout.markers.empty());
-  for (const Eigen::AlignedBox3d& m : layout.markers) {
-    world.fillBox(Eigen::AlignedBox3d(Eigen::Vector3d(m.min().x(), m.min().y(), kLaserHeight_m - 0.3),
-                                      Eigen::Vector3d(m.max().x(), m.max().y(), kLaserHeight_m + 0.3)),
-                  0.95f);
-  }
+  client::extendMarkersToLaserPlane(world, layout, building.floor_height_m, kLaserHeight_m);
   sim::TrajectoryOptions path;
   path.sensor_height_m = kLaserHeight_m;
   path.num_poses = 160;
   path.step_m = 0.26;
-  const std::vector<Eigen::Isometry3d> sensor_poses = sim::planTrajectory(world, path, 5);
-  const sim::Laser2dModel laser = sim::Laser2dModel::sickLike();
-  const Eigen::Vector3d mount(kLaserForward_m, 0.0, 0.0);
-  const Eigen::Vector3d mount_inverse(-kLaserForward_m, 0.0, 0.0);
+  client::Laser2dRobotOptions laser;
+  laser.laser = sim::Laser2dModel::sickLike();
+  laser.sensor_name = "front";
+  laser.mount_height_m = kLaserHeight_m;
+  client::Laser2dRobot simulated(world, sim::planTrajectory(world, path, 5), laser, 11);
 
   client::RobotClientOptions options;
   options.server_url = rmapd->wsUrl();
   options.hello.set_robot_id("walker");
   options.hello.set_map("floor");
-  v1::SensorDescription* sensor = options.hello.add_sensors();
-  sensor->set_name("front");
-  sensor->set_kind(v1::SensorDescription::LASER_2D);
-  sensor->set_model(laser.name);
-  sensor->mutable_mount()->mutable_position_m()->set_x(kLaserForward_m);
-  sensor->mutable_mount()->mutable_position_m()->set_z(kLaserHeight_m);
-  sensor->mutable_mount()->mutable_orientation()->set_w(1.0);
+  *options.hello.add_sensors() = simulated.sensor();
   std::mutex mutex;
   std::map<uint64_t, v1::PoseEstimate> estimates;
   client::RobotClient robot(options);
@@ -137,40 +108,14 @@ TEST(Slam2dStream, ScansGetPoseEstimatesAndMakeTheTwoDimensionalLayers) {
   });
   robot.connect();
 
-  std::mt19937_64 rng(11);
-  std::normal_distribution<double> unit(0.0, 1.0);
+  // One pass over the tour (wheel odometry drifting 5 % per step plus a heading error).
   std::map<uint64_t, Eigen::Vector3d> truth;
-  Eigen::Vector3d odometry;
-  for (size_t k = 0; k < sensor_poses.size(); ++k) {
-    const Eigen::Vector3d base = compose(planar(sensor_poses[k]), mount_inverse);
-    if (k == 0) {
-      odometry = base;  // odometry in the map frame: the SLAM's frame is the world's
-    } else {
-      // Wheel odometry drifts: 5 % noise on each step, plus a rotation error.
-      const Eigen::Vector3d step = between(compose(planar(sensor_poses[k - 1]), mount_inverse), base);
-      const double d = step.head<2>().norm();
-      const Eigen::Vector3d noisy(step.x() * (1 + 0.05 * unit(rng)), step.y() + 0.02 * d * unit(rng),
-                                  step.z() + 0.02 * unit(rng));
-      odometry = compose(odometry, noisy);
-    }
-    const sim::Laser2dScan scan = sim::simulateLaser2d(world, sensor_poses[k], laser, rng);
+  for (int k = 0; k < path.num_poses; ++k) {
+    client::Laser2dStep step = simulated.next();
     v1::RobotMessage m;
-    v1::LaserScan2D* out = m.mutable_scan();
-    out->set_sensor("front");
-    out->set_stamp_ns(static_cast<int64_t>(k) * 100'000'000);
-    out->set_angle_min_rad(scan.angle_min_rad);
-    out->set_angle_increment_rad(scan.angle_increment_rad);
-    out->set_range_min_m(scan.range_min_m);
-    out->set_range_max_m(scan.range_max_m);
-    for (size_t i = 0; i < scan.ranges_m.size(); ++i) {
-      // The simulator reads "too close" as −inf; the protocol has only +inf for no return.
-      out->add_ranges_m(std::isfinite(scan.ranges_m[i]) ? scan.ranges_m[i] : INFINITY);
-      out->add_intensities(scan.intensities[i]);
-    }
-    out->mutable_odometry()->set_x_m(odometry.x());
-    out->mutable_odometry()->set_y_m(odometry.y());
-    out->mutable_odometry()->set_theta_rad(odometry.z());
-    truth[robot.send(m)] = base;
+    *m.mutable_scan() = std::move(step.scan);
+    m.mutable_scan()->set_stamp_ns(static_cast<int64_t>(k) * 100'000'000);
+    truth[robot.send(m)] = step.base_truth;
   }
   ASSERT_TRUE(robot.waitAllAcked(std::chrono::seconds(120)));
 

@@ -1,4 +1,4 @@
-// SimFeed: simulated lidar robots streaming clouds through RobotClient.
+// SimFeed: simulated lidar and 2D-laser robots streaming through RobotClient.
 
 #include "client/sim_feed.h"
 
@@ -8,11 +8,14 @@
 #include <exception>
 #include <condition_variable>
 #include <mutex>
+#include <numbers>
+#include <optional>
 #include <random>
 #include <stdexcept>
 #include <thread>
 #include <unordered_map>
 
+#include "client/laser2d_robot.h"
 #include "client/robot_client.h"
 #include "sim/trajectory.h"
 
@@ -26,6 +29,8 @@ constexpr double kLidarMaxRange_m = 20.0;
 constexpr double kLidarFov_deg = 15.0;   ///< ± elevation, as a 16-ring spinning lidar
 constexpr const char* kLidarName = "lidar";
 constexpr const char* kLidarModel = "sim-lidar-16";
+/// A wheeled robot's laser: it stays on its storey, a scan every 0.25 m.
+constexpr double kLaser2dStep_m = 0.25;
 
 sim::LidarModel lidarModel(const SimFeedOptions& o) {
   sim::LidarModel model;
@@ -44,17 +49,38 @@ sim::TrajectoryOptions trajectoryOptions(const SimFeedOptions& o) {
   return t;
 }
 
-rmap::v1::Hello makeHello(const SimFeedOptions& o, int robot) {
+Laser2dRobotOptions laser2dOptions(const SimFeedOptions& o) {
+  Laser2dRobotOptions l;
+  l.laser = o.laser2d_model;
+  return l;
+}
+
+sim::TrajectoryOptions laser2dTourOptions(const SimFeedOptions& o) {
+  sim::TrajectoryOptions t;
+  t.sensor_height_m = laser2dOptions(o).mount_height_m;
+  t.max_step_m = 0.0;  // no stairs: a 2D laser maps one storey
+  t.step_m = kLaser2dStep_m;
+  t.num_poses = o.poses;
+  return t;
+}
+
+/// Hello of robot `index` with its sensor.
+rmap::v1::Hello makeHello(const SimFeedOptions& o, int index, const rmap::v1::SensorDescription& sensor) {
   rmap::v1::Hello hello;
-  hello.set_robot_id(o.robot_prefix + "-" + std::to_string(robot));
-  hello.set_map(o.shared_map ? o.map_prefix : o.map_prefix + "-" + std::to_string(robot));
+  hello.set_robot_id(o.robot_prefix + "-" + std::to_string(index));
+  hello.set_map(o.shared_map ? o.map_prefix : o.map_prefix + "-" + std::to_string(index));
   hello.set_resolution_m(o.resolution_m);
-  rmap::v1::SensorDescription* lidar = hello.add_sensors();
-  lidar->set_name(kLidarName);
-  lidar->set_kind(rmap::v1::SensorDescription::LIDAR_3D);
-  lidar->set_model(kLidarModel);
-  lidar->mutable_mount()->mutable_orientation()->set_w(1.0);  // the clouds are in the map frame anyway
+  *hello.add_sensors() = sensor;
   return hello;
+}
+
+rmap::v1::SensorDescription lidarSensor() {
+  rmap::v1::SensorDescription lidar;
+  lidar.set_name(kLidarName);
+  lidar.set_kind(rmap::v1::SensorDescription::LIDAR_3D);
+  lidar.set_model(kLidarModel);
+  lidar.mutable_mount()->mutable_orientation()->set_w(1.0);  // the clouds are in the map frame anyway
+  return lidar;
 }
 
 /// One scan at `pose` as a map-frame cloud (stamp left for send time).
@@ -97,9 +123,23 @@ struct Totals {
   std::atomic<uint64_t> clouds_acked{0};
   std::atomic<uint64_t> points_sent{0};
   std::atomic<uint64_t> points_acked{0};
-  std::mutex mutex;  ///< guards the vectors
+  std::atomic<uint64_t> scans_sent{0};
+  std::atomic<uint64_t> scans_acked{0};
+  std::mutex mutex;  ///< guards the rest
   std::vector<double> ack_latencies_ms;
   std::vector<std::string> errors;
+  uint64_t pose_estimates = 0;
+  double pose_error_sum_m = 0.0;
+  double pose_error_max_m = 0.0;
+  double heading_error_max_rad = 0.0;
+
+  void addPoseError(double error_m, double heading_error_rad) {
+    std::lock_guard lock(mutex);
+    ++pose_estimates;
+    pose_error_sum_m += error_m;
+    pose_error_max_m = std::max(pose_error_max_m, error_m);
+    heading_error_max_rad = std::max(heading_error_max_rad, heading_error_rad);
+  }
 
   void addError(std::string error) {
     std::lock_guard lock(mutex);
@@ -107,19 +147,27 @@ struct Totals {
   }
 };
 
-/// What one robot drives and, in benchmark mode, the clouds it cycles over.
+/// What one robot drives: a lidar robot's poses and, in benchmark mode, the
+/// clouds it cycles over; or a 2D-laser robot.
 struct RobotPlan {
   std::vector<Eigen::Isometry3d> poses;
   std::mt19937_64 rng;
   std::vector<rmap::v1::RobotMessage> cache;
+  std::optional<Laser2dRobot> laser2d;
 };
 
 /// Plans the trajectory and simulates the cached clouds up front, so the
 /// timed part of a benchmark feed measures the server, not the simulator.
 RobotPlan planRobot(const SimScene& scene, const SimFeedOptions& o, int index) {
   std::seed_seq seeds{o.seed, static_cast<uint64_t>(index)};
-  RobotPlan plan{sim::planTrajectory(scene.world, trajectoryOptions(o), o.seed + static_cast<uint64_t>(index)),
-                 std::mt19937_64(seeds), {}};
+  const uint64_t tour_seed = o.seed + static_cast<uint64_t>(index);
+  if (index >= o.robots) {
+    RobotPlan plan;
+    plan.laser2d.emplace(scene.world, sim::planTrajectory(scene.world, laser2dTourOptions(o), tour_seed),
+                         laser2dOptions(o), std::mt19937_64(seeds)());
+    return plan;
+  }
+  RobotPlan plan{sim::planTrajectory(scene.world, trajectoryOptions(o), tour_seed), std::mt19937_64(seeds), {}, {}};
   const size_t cached = o.max_clouds == 0 ? o.precompute_clouds
                                           : std::min<size_t>(o.precompute_clouds, static_cast<size_t>(o.max_clouds));
   const sim::LidarModel model = lidarModel(o);
@@ -135,34 +183,55 @@ void runRobot(const SimScene& scene, const SimFeedOptions& o, int index, RobotPl
   RobotClientOptions client_options;
   client_options.server_url = o.server_url;
   client_options.token = o.token;
-  client_options.hello = makeHello(o, index);
+  client_options.hello = makeHello(o, index, plan.laser2d ? plan.laser2d->sensor() : lidarSensor());
   client_options.max_in_flight = o.max_in_flight;
   client_options.timeout = o.timeout;
   const std::string robot_id = client_options.hello.robot_id();
 
+  /// A message in flight: a cloud's point count, or a scan's true base pose.
+  struct InFlight {
+    uint64_t points = 0;
+    std::optional<Eigen::Vector3d> base_truth;
+  };
   std::vector<double> latencies_ms;
   std::mutex points_mutex;
-  std::unordered_map<uint64_t, uint64_t> points_by_seq;  ///< clouds in flight
+  std::unordered_map<uint64_t, InFlight> in_flight;
   try {
     RobotClient client(client_options);
     // Callbacks run on the client's I/O thread.
     client.onAck([&](const rmap::v1::Ack& ack, std::chrono::nanoseconds latency) {
-      uint64_t points = 0;
+      InFlight acked;
       {
         std::lock_guard lock(points_mutex);
-        if (const auto it = points_by_seq.find(ack.seq()); it != points_by_seq.end()) {
-          points = it->second;
-          points_by_seq.erase(it);
+        if (const auto it = in_flight.find(ack.seq()); it != in_flight.end()) {
+          acked = it->second;
+          in_flight.erase(it);
         }
         latencies_ms.push_back(std::chrono::duration<double, std::milli>(latency).count());
       }
-      totals.clouds_acked.fetch_add(1, std::memory_order_relaxed);
-      totals.points_acked.fetch_add(points, std::memory_order_relaxed);
+      (acked.base_truth ? totals.scans_acked : totals.clouds_acked).fetch_add(1, std::memory_order_relaxed);
+      totals.points_acked.fetch_add(acked.points, std::memory_order_relaxed);
+    });
+    // The server's 2D SLAM answers each scan with a PoseEstimate before its ack.
+    client.onPose([&](const rmap::v1::PoseEstimate& estimate) {
+      std::optional<Eigen::Vector3d> truth;
+      {
+        std::lock_guard lock(points_mutex);
+        if (const auto it = in_flight.find(estimate.seq()); it != in_flight.end()) truth = it->second.base_truth;
+      }
+      if (!truth) return;
+      const rmap::v1::Pose3& pose = estimate.pose();
+      const Eigen::Vector2d position(pose.position_m().x(), pose.position_m().y());
+      const Eigen::Quaterniond q(pose.orientation().w(), pose.orientation().x(), pose.orientation().y(),
+                                 pose.orientation().z());
+      const Eigen::Vector3d x_axis = q.normalized() * Eigen::Vector3d::UnitX();
+      const double yaw = std::atan2(x_axis.y(), x_axis.x());
+      totals.addPoseError((position - truth->head<2>()).norm(), std::abs(std::remainder(yaw - truth->z(), 2 * std::numbers::pi)));
     });
     client.onError([&](const rmap::v1::Error& error) {
       {
         std::lock_guard lock(points_mutex);
-        points_by_seq.erase(error.seq());  // answered, though refused
+        in_flight.erase(error.seq());  // answered, though refused
       }
       totals.addError(robot_id + ": seq " + std::to_string(error.seq()) + ": " + error.code() + ": " +
                       error.message() + (error.fatal() ? " (fatal)" : ""));
@@ -171,30 +240,42 @@ void runRobot(const SimScene& scene, const SimFeedOptions& o, int index, RobotPl
     const sim::LidarModel model = lidarModel(o);
 
     // A single sender: sequence numbers follow Welcome::last_durable_seq one by one,
-    // so each cloud's point count is filed before its ack can arrive.
-    uint64_t next_seq = client.connect().last_durable_seq() + 1;
+    // so each message's record is filed before its estimate or ack can arrive.
+    const uint64_t durable = client.connect().last_durable_seq();
+    uint64_t next_seq = durable + 1;
+    // A 2D-laser robot sends one scan per step, numbered from 1: one the
+    // server already holds steps resumes its tour (and odometry) after them.
+    if (plan.laser2d) plan.laser2d->skip(durable);
     const auto period = o.rate_hz > 0 ? std::chrono::duration_cast<Clock::duration>(
                                             std::chrono::duration<double>(1.0 / o.rate_hz))
                                       : Clock::duration::zero();
     // Robots are not synchronised: each starts at its own offset into the period.
-    Clock::time_point due = Clock::now() + period * index / o.robots;
+    Clock::time_point due = Clock::now() + period * index / (o.robots + o.laser2d_robots);
     for (uint64_t k = 0; o.max_clouds == 0 || k < o.max_clouds; ++k) {
       if (due >= end || Clock::now() >= end) break;
       std::this_thread::sleep_until(due);
-      rmap::v1::RobotMessage message = plan.cache.empty()
-                                           ? makeCloud(scene.world, plan.poses[k % plan.poses.size()], model, plan.rng)
-                                           : plan.cache[k % plan.cache.size()];
-      message.mutable_cloud()->set_stamp_ns(wallClockNs());
-      const uint64_t points = static_cast<uint64_t>(message.cloud().xyz_m_size() / 3);
+      rmap::v1::RobotMessage message;
+      InFlight record;
+      if (plan.laser2d) {
+        Laser2dStep step = plan.laser2d->next();
+        *message.mutable_scan() = std::move(step.scan);
+        message.mutable_scan()->set_stamp_ns(wallClockNs());
+        record.base_truth = step.base_truth;
+      } else {
+        message = plan.cache.empty() ? makeCloud(scene.world, plan.poses[k % plan.poses.size()], model, plan.rng)
+                                     : plan.cache[k % plan.cache.size()];
+        message.mutable_cloud()->set_stamp_ns(wallClockNs());
+        record.points = static_cast<uint64_t>(message.cloud().xyz_m_size() / 3);
+      }
       {
         std::lock_guard lock(points_mutex);
-        points_by_seq[next_seq] = points;
+        in_flight[next_seq] = record;
       }
       const uint64_t seq = client.send(std::move(message));
       if (seq != next_seq) throw std::logic_error("sequence numbers skipped: sent " + std::to_string(seq));
       ++next_seq;
-      totals.clouds_sent.fetch_add(1, std::memory_order_relaxed);
-      totals.points_sent.fetch_add(points, std::memory_order_relaxed);
+      (record.base_truth ? totals.scans_sent : totals.clouds_sent).fetch_add(1, std::memory_order_relaxed);
+      totals.points_sent.fetch_add(record.points, std::memory_order_relaxed);
       // No catch-up bursts after a slow spell: the schedule restarts from now.
       due = std::max(due + period, Clock::now());
     }
@@ -202,9 +283,9 @@ void runRobot(const SimScene& scene, const SimFeedOptions& o, int index, RobotPl
       size_t unanswered = 0;
       {
         std::lock_guard lock(points_mutex);
-        unanswered = points_by_seq.size();
+        unanswered = in_flight.size();
       }
-      totals.addError(robot_id + ": " + std::to_string(unanswered) + " clouds unacknowledged at the end (" +
+      totals.addError(robot_id + ": " + std::to_string(unanswered) + " messages unacknowledged at the end (" +
                       (client.connected() ? "timed out after " + std::to_string(o.timeout.count()) + " ms"
                                           : std::string("connection closed")) + ")");
     }
@@ -225,18 +306,26 @@ SimScene makeSimScene(uint64_t seed, double voxel_m) {
   options.floors = 2;  // stairs give the robots a second level to map
   sim::BuildingLayout layout;
   sim::VoxelWorld world = sim::makeBuilding(options, seed, &layout);
+  extendMarkersToLaserPlane(world, layout, options.floor_height_m, Laser2dRobotOptions{}.mount_height_m);
   return SimScene{std::move(world), std::move(layout)};
 }
 
 SimFeedResult runSimFeed(const SimScene& scene, const SimFeedOptions& options) {
-  if (options.robots < 1) throw std::invalid_argument("robots must be at least 1");
+  if (options.robots < 0) throw std::invalid_argument("robots must be >= 0");
+  if (options.laser2d_robots < 0) throw std::invalid_argument("laser2d_robots must be >= 0");
+  if (options.robots + options.laser2d_robots < 1) {
+    throw std::invalid_argument("robots + laser2d_robots must be at least 1");
+  }
   if (!(options.rate_hz >= 0.0) || !std::isfinite(options.rate_hz)) {
     throw std::invalid_argument("rate_hz must be finite and >= 0");
   }
   lidarModel(options).validate();
   trajectoryOptions(options).validate();
+  laser2dOptions(options).validate();
+  laser2dTourOptions(options).validate();
 
-  std::vector<RobotPlan> plans(static_cast<size_t>(options.robots));
+  const int robots = options.robots + options.laser2d_robots;
+  std::vector<RobotPlan> plans(static_cast<size_t>(robots));
   {
     std::vector<std::exception_ptr> failures(plans.size());
     std::vector<std::thread> planners;
@@ -260,10 +349,10 @@ SimFeedResult runSimFeed(const SimScene& scene, const SimFeedOptions& options) {
   const Clock::time_point end = start + options.duration;
   std::mutex mutex;
   std::condition_variable cv;
-  int running = options.robots;
+  int running = robots;
   std::vector<std::thread> threads;
-  threads.reserve(static_cast<size_t>(options.robots));
-  for (int i = 0; i < options.robots; ++i) {
+  threads.reserve(static_cast<size_t>(robots));
+  for (int i = 0; i < robots; ++i) {
     threads.emplace_back([&, i] {
       runRobot(scene, options, i, plans[static_cast<size_t>(i)], end, totals);
       std::lock_guard lock(mutex);
@@ -277,8 +366,14 @@ SimFeedResult runSimFeed(const SimScene& scene, const SimFeedOptions& options) {
     while (!cv.wait_for(lock, std::chrono::seconds(1), [&running] { return running == 0; })) {
       if (!options.on_progress) continue;
       lock.unlock();
-      options.on_progress({elapsed_s(), totals.clouds_sent.load(), totals.clouds_acked.load(),
-                           totals.points_acked.load()});
+      SimFeedProgress progress{elapsed_s(), totals.clouds_sent.load(), totals.clouds_acked.load(),
+                               totals.points_acked.load(), totals.scans_sent.load()};
+      {
+        std::lock_guard totals_lock(totals.mutex);
+        progress.pose_estimates = totals.pose_estimates;
+        if (totals.pose_estimates > 0) progress.pose_error_mean_m = totals.pose_error_sum_m / totals.pose_estimates;
+      }
+      options.on_progress(progress);
       lock.lock();
     }
   }
@@ -289,6 +384,12 @@ SimFeedResult runSimFeed(const SimScene& scene, const SimFeedOptions& options) {
   result.clouds_sent = totals.clouds_sent.load();
   result.clouds_acked = totals.clouds_acked.load();
   result.points_sent = totals.points_sent.load();
+  result.scans_sent = totals.scans_sent.load();
+  result.scans_acked = totals.scans_acked.load();
+  result.pose_estimates = totals.pose_estimates;
+  if (totals.pose_estimates > 0) result.pose_error_mean_m = totals.pose_error_sum_m / totals.pose_estimates;
+  result.pose_error_max_m = totals.pose_error_max_m;
+  result.heading_error_max_rad = totals.heading_error_max_rad;
   result.ack_latencies_ms = std::move(totals.ack_latencies_ms);
   result.errors = std::move(totals.errors);
   return result;

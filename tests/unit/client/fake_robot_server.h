@@ -14,6 +14,7 @@
 #include <boost/beast/http.hpp>
 #include <boost/beast/websocket.hpp>
 #include <chrono>
+#include <cmath>
 #include <condition_variable>
 #include <deque>
 #include <map>
@@ -34,7 +35,7 @@ struct FakeRobotServerOptions {
   bool welcome = true;                     ///< false: never answer Hello
   bool ack = true;                         ///< false: never acknowledge
   std::chrono::milliseconds ack_delay{0};  ///< each ack leaves this long after its message arrived
-  bool poses = false;                      ///< send a PoseEstimate (the cloud's sensor pose) before each ack
+  bool poses = false;                      ///< send a PoseEstimate (a cloud's sensor pose, a scan's odometry) before each ack
   uint64_t error_seq = 0;                  ///< answer this seq with an Error instead of an Ack (0: none)
   bool error_fatal = false;                ///< that Error is fatal: the session closes after it
   bool refuse_upgrade = false;             ///< answer every upgrade with 401 and a JSON error
@@ -200,6 +201,18 @@ class FakeRobotServer {
           pose.mutable_pose()->set_seq(message.seq());
           pose.mutable_pose()->set_stamp_ns(message.cloud().stamp_ns());
           *pose.mutable_pose()->mutable_pose() = message.cloud().sensor_pose();
+          self->reply(pose);
+        }
+        if (self->server_.options_.poses && message.has_scan() && message.scan().has_odometry()) {
+          const rmap::v1::Pose2& odometry = message.scan().odometry();
+          rmap::v1::ServerMessage pose;
+          pose.mutable_pose()->set_seq(message.seq());
+          pose.mutable_pose()->set_stamp_ns(message.scan().stamp_ns());
+          rmap::v1::Pose3& p = *pose.mutable_pose()->mutable_pose();
+          p.mutable_position_m()->set_x(odometry.x_m());
+          p.mutable_position_m()->set_y(odometry.y_m());
+          p.mutable_orientation()->set_w(std::cos(odometry.theta_rad() / 2));
+          p.mutable_orientation()->set_z(std::sin(odometry.theta_rad() / 2));
           self->reply(pose);
         }
         rmap::v1::ServerMessage ack;

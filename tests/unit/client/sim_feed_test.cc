@@ -14,6 +14,7 @@ namespace {
 
 using std::chrono::milliseconds;
 using test::FakeRobotServer;
+using test::FakeRobotServerOptions;
 
 /// One scene for the whole suite (building it is cheap, but there is no need to repeat it).
 const SimScene& scene() {
@@ -177,6 +178,137 @@ TEST(SimFeed, DurationStopsTheFeedAndProgressIsReported) {
   }
 }
 
+TEST(SimFeed, LaserRobotsSendScansWithOdometryAndScoreTheirPoses) {
+  // The fake answers each scan with its odometry as the "estimate": the
+  // reported error is then the odometry's drift from the truth.
+  FakeRobotServerOptions with_poses;
+  with_poses.poses = true;
+  FakeRobotServer server(with_poses);
+  SimFeedOptions o = smallFeed(server);
+  o.robots = 1;
+  o.laser2d_robots = 1;
+  o.laser2d_model = sim::Laser2dModel::hokuyoLike();
+  o.max_clouds = 6;
+  const SimFeedResult result = runSimFeed(scene(), o);
+
+  EXPECT_TRUE(result.errors.empty()) << result.errors.front();
+  EXPECT_EQ(result.clouds_sent, 6u);
+  EXPECT_EQ(result.clouds_acked, 6u);
+  EXPECT_EQ(result.scans_sent, 6u);
+  EXPECT_EQ(result.scans_acked, 6u);
+  EXPECT_EQ(result.pose_estimates, 6u);
+  EXPECT_GT(result.pose_error_max_m, 0.0);  // five noisy steps after an exact start
+  EXPECT_LT(result.pose_error_max_m, 0.3);  // 5 % of at most 1.25 m, plus heading drift
+  EXPECT_GT(result.pose_error_mean_m, 0.0);
+  EXPECT_LT(result.pose_error_mean_m, result.pose_error_max_m);
+  EXPECT_GT(result.heading_error_max_rad, 0.0);
+
+  std::map<std::string, v1::Hello> hello_of;
+  for (const v1::Hello& hello : server.hellos()) hello_of[hello.robot_id()] = hello;
+  ASSERT_EQ(hello_of.size(), 2u);
+  EXPECT_EQ(hello_of.at("sim-robot-0").sensors(0).kind(), v1::SensorDescription::LIDAR_3D);
+  const v1::Hello& laser_hello = hello_of.at("sim-robot-1");
+  EXPECT_EQ(laser_hello.map(), "sim");
+  ASSERT_EQ(laser_hello.sensors_size(), 1);
+  const v1::SensorDescription& laser = laser_hello.sensors(0);
+  EXPECT_EQ(laser.kind(), v1::SensorDescription::LASER_2D);
+  EXPECT_EQ(laser.model(), "hokuyo_like");
+  EXPECT_DOUBLE_EQ(laser.mount().position_m().x(), 0.15);
+  EXPECT_DOUBLE_EQ(laser.mount().position_m().z(), 1.0);
+
+  std::vector<v1::LaserScan2D> scans;
+  for (const v1::RobotMessage& m : server.messages()) {
+    if (m.has_scan()) scans.push_back(m.scan());
+  }
+  ASSERT_EQ(scans.size(), 6u);
+  const Eigen::AlignedBox3d bounds = scene().world.bounds();
+  for (size_t k = 0; k < scans.size(); ++k) {
+    const v1::LaserScan2D& s = scans[k];
+    EXPECT_EQ(s.sensor(), laser.name());
+    EXPECT_GT(s.stamp_ns(), 0);
+    if (k > 0) {
+      EXPECT_GT(s.stamp_ns(), scans[k - 1].stamp_ns());
+    }
+    ASSERT_EQ(s.ranges_m_size(), 1081);  // the Hokuyo preset
+    ASSERT_EQ(s.intensities_size(), s.ranges_m_size());
+    EXPECT_NEAR(s.angle_min_rad() + 1080 * s.angle_increment_rad(), -s.angle_min_rad(), 1e-4);
+    int returns = 0;
+    for (int i = 0; i < s.ranges_m_size(); ++i) {
+      const float r = s.ranges_m(i);
+      ASSERT_FALSE(std::isnan(r));
+      ASSERT_FALSE(r < 0.0f && std::isinf(r));  // no −inf on the wire
+      if (std::isfinite(r) && r <= s.range_max_m()) {
+        ++returns;
+        EXPECT_GE(s.intensities(i), 0.0f);
+      }
+    }
+    EXPECT_GT(returns, 1081 / 2);  // indoors most beams hit a wall
+    // Odometry: on the ground storey, inside the building, moving by about one step.
+    ASSERT_TRUE(s.has_odometry());
+    const Eigen::Vector3d base(s.odometry().x_m(), s.odometry().y_m(), 0.5);
+    EXPECT_TRUE(bounds.contains(base)) << base.transpose();
+    if (k > 0) {
+      const Eigen::Vector2d step(s.odometry().x_m() - scans[k - 1].odometry().x_m(),
+                                 s.odometry().y_m() - scans[k - 1].odometry().y_m());
+      EXPECT_LT(step.norm(), 0.4);
+    }
+  }
+
+  // Deterministic in the seed: a second run sends the same scans.
+  FakeRobotServer again_server(with_poses);
+  SimFeedOptions again = o;
+  again.server_url = again_server.url();
+  const SimFeedResult again_result = runSimFeed(scene(), again);
+  EXPECT_DOUBLE_EQ(again_result.pose_error_max_m, result.pose_error_max_m);
+  std::vector<v1::LaserScan2D> again_scans;
+  for (const v1::RobotMessage& m : again_server.messages()) {
+    if (m.has_scan()) again_scans.push_back(m.scan());
+  }
+  ASSERT_EQ(again_scans.size(), scans.size());
+  for (size_t k = 0; k < scans.size(); ++k) {
+    EXPECT_EQ(again_scans[k].odometry().SerializeAsString(), scans[k].odometry().SerializeAsString());
+    EXPECT_TRUE(std::equal(scans[k].ranges_m().begin(), scans[k].ranges_m().end(), again_scans[k].ranges_m().begin()));
+  }
+
+  // A robot the server already holds 4 messages of resumes at its fifth step.
+  FakeRobotServerOptions holding = with_poses;
+  holding.last_durable_seq = 4;
+  FakeRobotServer resume_server(holding);
+  SimFeedOptions resume = o;
+  resume.server_url = resume_server.url();
+  resume.max_clouds = 2;
+  EXPECT_TRUE(runSimFeed(scene(), resume).errors.empty());
+  std::vector<v1::RobotMessage> resumed;
+  for (const v1::RobotMessage& m : resume_server.messages()) {
+    if (m.has_scan()) resumed.push_back(m);
+  }
+  ASSERT_EQ(resumed.size(), 2u);
+  for (size_t k = 0; k < 2; ++k) {
+    EXPECT_EQ(resumed[k].seq(), 5 + k);
+    EXPECT_EQ(resumed[k].scan().odometry().SerializeAsString(), scans[4 + k].odometry().SerializeAsString()) << k;
+  }
+}
+
+TEST(SimFeed, LaserRobotsAloneNeedNoLidarRobot) {
+  FakeRobotServer server;
+  SimFeedOptions o = smallFeed(server);
+  o.robots = 0;
+  o.laser2d_robots = 2;
+  o.shared_map = false;
+  o.max_clouds = 2;
+  const SimFeedResult result = runSimFeed(scene(), o);
+  EXPECT_TRUE(result.errors.empty()) << result.errors.front();
+  EXPECT_EQ(result.clouds_sent, 0u);
+  EXPECT_EQ(result.scans_acked, 4u);
+  EXPECT_EQ(result.pose_estimates, 0u);  // this fake sends none
+  std::map<std::string, std::string> map_of;
+  for (const v1::Hello& hello : server.hellos()) {
+    map_of[hello.robot_id()] = hello.map();
+    EXPECT_EQ(hello.sensors(0).model(), "sick_like");
+  }
+  EXPECT_EQ(map_of, (std::map<std::string, std::string>{{"sim-robot-0", "sim-0"}, {"sim-robot-1", "sim-1"}}));
+}
+
 TEST(SimFeed, ConnectionFailuresAreReportedNotThrown) {
   uint16_t port = 0;
   {  // a port nobody listens on any more
@@ -203,7 +335,14 @@ TEST(SimFeed, ConnectionFailuresAreReportedNotThrown) {
 TEST(SimFeed, RejectsBadOptions) {
   SimFeedOptions o;
   o.robots = 0;
+  EXPECT_THROW(runSimFeed(scene(), o), std::invalid_argument);  // no robot at all
+  o.laser2d_robots = -1;
   EXPECT_THROW(runSimFeed(scene(), o), std::invalid_argument);
+  o.laser2d_robots = 1;
+  o.laser2d_model.beams = 1;
+  EXPECT_THROW(runSimFeed(scene(), o), std::invalid_argument);
+  o.laser2d_model = sim::Laser2dModel::sickLike();
+  o.laser2d_robots = 0;
   o.robots = 1;
   o.rate_hz = -1.0;
   EXPECT_THROW(runSimFeed(scene(), o), std::invalid_argument);
