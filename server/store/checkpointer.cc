@@ -7,11 +7,11 @@
 namespace rmap::store {
 
 Checkpointer::Checkpointer(const std::filesystem::path& database, int64_t cache_bytes, int restart_pages,
-                           std::chrono::milliseconds period, std::mutex& write_mutex)
+                           std::chrono::milliseconds period, WriteGate& write_gate)
     : connection_(database, SQLITE_OPEN_READWRITE),
       restart_pages_(restart_pages),
       period_(period),
-      write_mutex_(write_mutex) {
+      write_gate_(write_gate) {
   applyCommonSettings(connection_, cache_bytes);
   thread_ = std::thread([this] { run(); });
 }
@@ -44,9 +44,10 @@ void Checkpointer::checkpoint() {
   // long WAL the writers wait while the frames since the passive checkpoint
   // are copied (and SQLite's RESTART mode would starve behind them).
   if (rc == SQLITE_OK && log_pages >= restart_pages_ && log_pages != log_pages_at_restart_) {
-    std::lock_guard writers(write_mutex_);
-    rc = sqlite3_wal_checkpoint_v2(connection_.handle(), nullptr, SQLITE_CHECKPOINT_PASSIVE, &log_pages,
-                                   &copied_pages);
+    write_gate_.whileWritersWait([&] {
+      rc = sqlite3_wal_checkpoint_v2(connection_.handle(), nullptr, SQLITE_CHECKPOINT_PASSIVE, &log_pages,
+                                     &copied_pages);
+    });
     log_pages_at_restart_ = log_pages;
   }
   // SQLITE_BUSY: readers or a writer held on past the busy timeout; the next round retries.

@@ -13,20 +13,21 @@
 #include <thread>
 
 #include "store/sqlite_connection.h"
+#include "store/write_gate.h"
 
 namespace rmap::store {
 
 class Checkpointer {
  public:
   /// @param restart_pages  WAL length in pages from which a checkpoint holds
-  ///   `write_mutex` while it copies the few frames passive checkpoints left,
+  ///   the writers back while it copies the few frames passive checkpoints left,
   ///   so that the next write starts the WAL over and it cannot grow without
   ///   bound under a steady stream of commits
   /// @param period  time between passive checkpoints
-  /// @param write_mutex  held by every write transaction of the store
+  /// @param write_gate  the store's writer lock, held by every write transaction
   /// @throws StoreError when the database cannot be opened
   Checkpointer(const std::filesystem::path& database, int64_t cache_bytes, int restart_pages,
-               std::chrono::milliseconds period, std::mutex& write_mutex);
+               std::chrono::milliseconds period, WriteGate& write_gate);
   /// Stops the thread; a checkpoint in progress completes first.
   ~Checkpointer();
   Checkpointer(const Checkpointer&) = delete;
@@ -41,7 +42,7 @@ class Checkpointer {
   int restart_pages_;
   int log_pages_at_restart_ = -1;  ///< WAL length seen by the last restarting checkpoint
   std::chrono::milliseconds period_;
-  std::mutex& write_mutex_;
+  WriteGate& write_gate_;
   std::mutex mutex_;
   std::condition_variable wake_;
   bool stopping_ = false;

@@ -15,6 +15,7 @@
 #include <system_error>
 
 #include "store/checkpointer.h"
+#include "store/write_gate.h"
 #include "store/connection_settings.h"
 #include "store/reader_pool.h"
 #include "store/schema.h"
@@ -133,7 +134,7 @@ class SqliteStore final : public Store {
     count.step();
     message_count_ = static_cast<uint64_t>(count.int64At(0));
     checkpointer_.emplace(database, options.cache_bytes, options.wal_restart_pages,
-                          std::chrono::milliseconds(options.wal_checkpoint_period_ms), write_mutex_);
+                          std::chrono::milliseconds(options.wal_checkpoint_period_ms), write_gate_);
   }
 
   /// Reads every page: after a crash, proof that WAL recovery left a sound database.
@@ -151,7 +152,7 @@ class SqliteStore final : public Store {
     results.reserve(messages.size());
     if (messages.empty()) return results;
 
-    std::lock_guard lock(write_mutex_);
+    auto lock = write_gate_.lockWriter();
     Transaction transaction(writer_, kOperation);
     Statement insert(writer_, kInsertMessage, kOperation);
     uint64_t inserted = 0;
@@ -208,7 +209,7 @@ class SqliteStore final : public Store {
 
   MapRecord ensureMap(const MapRecord& map) override {
     constexpr std::string_view kOperation = "create map";
-    std::lock_guard lock(write_mutex_);
+    auto lock = write_gate_.lockWriter();
     Statement insert(writer_, kInsertMap, kOperation);
     insert.bindText(1, map.name);
     insert.bind(2, map.resolution_m);
@@ -232,7 +233,7 @@ class SqliteStore final : public Store {
   void upsertRobot(const RobotRecord& robot) override {
     constexpr std::string_view kOperation = "save robot";
     checkSeq(robot.robot_id, robot.last_seq, 0, kOperation);
-    std::lock_guard lock(write_mutex_);
+    auto lock = write_gate_.lockWriter();
     Statement upsert(writer_, kUpsertRobot, kOperation);
     upsert.bindText(1, robot.robot_id);
     upsert.bindText(2, robot.map);
@@ -262,7 +263,7 @@ class SqliteStore final : public Store {
   void appendTrajectory(const std::string& robot_id, std::span<const TrajectoryPose> poses) override {
     constexpr std::string_view kOperation = "append trajectory";
     if (poses.empty()) return;
-    std::lock_guard lock(write_mutex_);
+    auto lock = write_gate_.lockWriter();
     Transaction transaction(writer_, kOperation);
     Statement insert(writer_, kInsertPose, kOperation);
     insert.bindText(1, robot_id);
@@ -295,7 +296,7 @@ class SqliteStore final : public Store {
   }
 
   int64_t appendEvent(const EventRecord& event) override {
-    std::lock_guard lock(write_mutex_);
+    auto lock = write_gate_.lockWriter();
     Statement insert(writer_, kInsertEvent, "append event");
     insert.bindText(1, event.map);
     insert.bindText(2, event.kind);
@@ -319,7 +320,7 @@ class SqliteStore final : public Store {
   }
 
   void putSnapshot(const Snapshot& snapshot) override {
-    std::lock_guard lock(write_mutex_);
+    auto lock = write_gate_.lockWriter();
     Statement put(writer_, kPutSnapshot, "save snapshot");
     put.bindText(1, snapshot.map);
     put.bind(2, snapshot.last_message_id);
@@ -346,7 +347,7 @@ class SqliteStore final : public Store {
     return query.int64At(0);
   }
 
-  std::mutex write_mutex_;
+  WriteGate write_gate_;
   Connection writer_;
   ReaderPool readers_;
   /// Declared last: its thread stops before the connections close.
