@@ -35,11 +35,12 @@ async function hook(fn, arg = null) {
   return page.evaluate(`(${fn.toString()})(window.rmapViewer, ${JSON.stringify(arg)})`);
 }
 
-describe('web viewer', { timeout: 170000 }, () => {
+describe('web viewer', { timeout: 230000 }, () => {
   before(async () => {
     server = await startRmapd();
     log(`rmapd ${server.apiUrl} (viewer at ${server.url})`);
-    sim = startSim(server, { robots: 2, duration: 60, rate: 10 });
+    // Streams until after() stops it: the later tests need tiles and poses that still change.
+    sim = startSim(server, { robots: 2, duration: 220, rate: 10 });
     await waitFor('map sim with cuboids', async () => {
       const maps = await getJson(server, '/v1/maps');
       const m = maps.maps.find((x) => x.name === 'sim');
@@ -58,17 +59,27 @@ describe('web viewer', { timeout: 170000 }, () => {
   });
 
   test('headless screenshot after 15 s of virtual time shows the map', async () => {
-    const context = await browser.newContext({ viewport: { width: 1280, height: 800 } });
-    const p = await context.newPage();
+    // Chromium's Page.captureScreenshot can stall behind a long software-GL frame on a busy
+    // 2-core machine (seen in about one run in four); a second page gets one more try, and
+    // the first failure is logged, so a hang that is not a one-off still fails the test.
+    let result;
+    let p;
+    let context;
     const foreign = [];
-    await p.route('**/*', (route) => {
-      const host = new URL(route.request().url()).hostname;
-      if (host !== '127.0.0.1') { foreign.push(route.request().url()); return route.abort(); }
-      return route.continue();
-    });
-    const result = await virtualTimeScreenshot(p, `${server.url}/`, { budgetMs: 15000, timeoutMs: 90000 });
-    log(`virtual-time screenshot: load ${result.loadMs} ms, 15 s of virtual time in ${result.budgetRealMs} ms, `
-      + `capture ${result.screenshotMs} ms${result.error ? `, error: ${result.error}` : ''}`);
+    for (let attempt = 1; attempt <= 2; ++attempt) {
+      context = await browser.newContext({ viewport: { width: 1280, height: 800 } });
+      p = await context.newPage();
+      await p.route('**/*', (route) => {
+        const host = new URL(route.request().url()).hostname;
+        if (host !== '127.0.0.1') { foreign.push(route.request().url()); return route.abort(); }
+        return route.continue();
+      });
+      result = await virtualTimeScreenshot(p, `${server.url}/`, { budgetMs: 15000, timeoutMs: 60000 });
+      log(`virtual-time screenshot (attempt ${attempt}): load ${result.loadMs} ms, 15 s of virtual time in `
+        + `${result.budgetRealMs} ms, capture ${result.screenshotMs} ms${result.error ? `, error: ${result.error}` : ''}`);
+      if (result.error === undefined) break;
+      await context.close().catch(() => {});
+    }
     assert.equal(result.error, undefined, result.error);
     fs.writeFileSync(artifactPath('viewer-virtual-time.png'), result.png);
     const png = decodePng(result.png);
