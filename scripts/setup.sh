@@ -13,6 +13,7 @@ packages=(
   libboost-dev libboost-system-dev libssl-dev
   libprotobuf-dev protobuf-compiler libsqlite3-dev libyaml-cpp-dev
   libpng-dev  # PNG raster tiles of the 2D layers
+  libopencv-dev libceres-dev  # loop closure: binary features and images, the pose graph
   chromium  # the browser tests of the viewer (tests/browser)
   jq        # bench/*_matrix.sh collect the benchmarks' JSON into tables
 )
