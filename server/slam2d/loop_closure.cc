@@ -51,6 +51,8 @@ void LoopClosureOptions::validate() const {
           "edge standard deviations must be finite and > 0");
   require(positive(max_loop_error_m) && positive(max_loop_error_rad), "max_loop_error_* must be > 0");
   require(cached_submaps >= 1, "cached_submaps must be ≥ 1");
+  require(nonNegative(match_point_spacing_m), "match_point_spacing_m must be ≥ 0");
+  require(nonNegative(rerender_shift_m) && nonNegative(rerender_shift_rad), "rerender_shift_* must be ≥ 0");
   require(submap.levels >= 1 && submap.levels <= 8, "submap.levels must be in [1, 8]");
   require(submap.unknown_probability >= 0.0f && submap.unknown_probability <= 1.0f,
           "submap.unknown_probability must be in [0, 1]");
@@ -108,7 +110,9 @@ bool LoopCloser::addKeyframe(std::vector<Keyframe>& keyframes) {
       continue;
     }
     for (Pending& o : pending_) {
-      if (&o == &p || o.closure.query == p.closure.query || !agree(p, o)) continue;
+      // Support comes from another keyframe matched against another submap: consecutive
+      // keyframes against one submap repeat the same aliasing (seen on raw fr079).
+      if (o.closure.query == p.closure.query || o.closure.match == p.closure.match || !agree(p, o)) continue;
       p.supported = o.supported = true;
       large_correction = true;
     }
