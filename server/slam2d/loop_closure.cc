@@ -47,8 +47,9 @@ void LoopClosureOptions::validate() const {
   require(nonNegative(support_tolerance_m) && nonNegative(support_tolerance_rad), "support_tolerance_* must be ≥ 0");
   require(optimize_every_keyframes >= 1, "optimize_every_keyframes must be ≥ 1");
   require(positive(sequential_sigma_m) && positive(sequential_sigma_rad) && positive(loop_sigma_m) &&
-              positive(loop_sigma_rad),
-          "edge standard deviations must be finite and > 0");
+              positive(loop_sigma_rad) && nonNegative(sequential_sigma_m_per_m) &&
+              nonNegative(sequential_sigma_rad_per_m),
+          "edge standard deviations must be finite and > 0 (their growth ≥ 0)");
   require(positive(max_loop_error_m) && positive(max_loop_error_rad), "max_loop_error_* must be > 0");
   require(cached_submaps >= 1, "cached_submaps must be ≥ 1");
   require(nonNegative(match_point_spacing_m), "match_point_spacing_m must be ≥ 0");
@@ -79,8 +80,11 @@ bool LoopCloser::addKeyframe(std::vector<Keyframe>& keyframes) {
   TrajectoryState& trajectory = trajectories_[kf.trajectory];
   if (trajectory.last_keyframe) {
     const Pose2 step = between(keyframes[*trajectory.last_keyframe].pose, kf.pose);
+    const double d = step.translation().norm();
     graph_.addEdge({*trajectory.last_keyframe, q, toGraph(step),
-                    diagonalInformation(options_.sequential_sigma_m, options_.sequential_sigma_rad), false});
+                    diagonalInformation(options_.sequential_sigma_m + options_.sequential_sigma_m_per_m * d,
+                                        options_.sequential_sigma_rad + options_.sequential_sigma_rad_per_m * d),
+                    false});
     trajectory.travel_since_closure_m += step.translation().norm();
   }
   if (!trajectory.last_keyframe || submaps_[trajectory.open_submap].finished) {

@@ -70,9 +70,13 @@ struct LoopClosureOptions {
   double support_tolerance_rad = 0.05;
   int optimize_every_keyframes = 20;
   /// Standard deviations of the edges: between consecutive keyframes (the
-  /// front end's relative pose) and of a loop closure match.
+  /// front end's relative pose; its error grows with the step, so a jump
+  /// after a gap in the data does not hold the graph rigid) and of a loop
+  /// closure match.
   double sequential_sigma_m = 0.02;
+  double sequential_sigma_m_per_m = 0.1;
   double sequential_sigma_rad = 0.005;
+  double sequential_sigma_rad_per_m = 0.02;
   double loop_sigma_m = 0.05;
   double loop_sigma_rad = 0.02;
   double max_loop_error_m = 0.3;    ///< after optimisation, loop edges further off are rejected
