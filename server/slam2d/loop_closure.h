@@ -74,9 +74,9 @@ struct LoopClosureOptions {
   /// after a gap in the data does not hold the graph rigid) and of a loop
   /// closure match.
   double sequential_sigma_m = 0.02;
-  double sequential_sigma_m_per_m = 0.1;
+  double sequential_sigma_m_per_m = 0.05;
   double sequential_sigma_rad = 0.005;
-  double sequential_sigma_rad_per_m = 0.02;
+  double sequential_sigma_rad_per_m = 0.01;
   double loop_sigma_m = 0.05;
   double loop_sigma_rad = 0.02;
   double max_loop_error_m = 0.3;    ///< after optimisation, loop edges further off are rejected
