@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <numbers>
 #include <stdexcept>
 #include <string>
@@ -15,7 +16,7 @@ struct CorrelativeMatcher::Rotation {
 };
 
 /// A block of 2^level × 2^level translations starting at (dx, dy) cells, at one
-/// rotation, with the upper bound of its scores (exact score at level 0).
+/// rotation: `score` is the quantised bound sum at level ≥ 1, the exact score at level 0.
 struct CorrelativeMatcher::Candidate {
   int rotation = 0;
   int dx = 0, dy = 0;
@@ -31,19 +32,33 @@ void CorrelativeMatcherOptions::validate() const {
     throw std::invalid_argument("correlative matcher: angular_step_rad must be finite and ≥ 0 (0 = from the scan)");
 }
 
+namespace {
+
+/// Bounds are sums of probabilities quantised up to 1/255, so a level is a
+/// quarter of the floats' memory and its sums are exact integers.
+constexpr double kQuanta = 255.0;
+
+uint8_t quantiseUp(float p) {
+  auto q = static_cast<int>(std::ceil(static_cast<double>(p) * kQuanta));
+  if (q / kQuanta < p) ++q;  // ceil of a rounded product may fall short by one
+  return static_cast<uint8_t>(std::clamp(q, 0, 255));
+}
+
+}  // namespace
+
 CorrelativeMatcher::CorrelativeMatcher(ProbabilityRaster raster, CorrelativeMatcherOptions options)
     : raster_(std::move(raster)), options_(options) {
   raster_.validate();
   options_.validate();
-  levels_.resize(static_cast<size_t>(options_.branch_levels));
-  levels_[0] = {0, raster_.width, raster_.height, raster_.p};
-  const float outside = raster_.outside_p;
+  outside_q_ = quantiseUp(raster_.outside_p);
+  Level below{0, raster_.width, raster_.height, {}};
+  below.v.reserve(raster_.p.size());
+  for (float p : raster_.p) below.v.push_back(quantiseUp(p));
   // Level h from level h−1: a 2^h window is two 2^(h−1) windows half a window
   // apart, first along x, then along y, so each level costs O(cells).
-  for (size_t h = 1; h < levels_.size(); ++h) {
-    const Level& below = levels_[h - 1];
+  for (int h = 1; h < options_.branch_levels; ++h) {
     const int half = 1 << (h - 1);
-    Level& level = levels_[h];
+    Level level;
     level.offset = (1 << h) - 1;
     level.width = raster_.width + level.offset;
     level.height = raster_.height + level.offset;
@@ -51,10 +66,10 @@ CorrelativeMatcher::CorrelativeMatcher(ProbabilityRaster raster, CorrelativeMatc
       const int sx = x + below.offset, sy = y + below.offset;
       return sx >= 0 && sy >= 0 && sx < below.width && sy < below.height
                  ? below.v[static_cast<size_t>(sy) * static_cast<size_t>(below.width) + static_cast<size_t>(sx)]
-                 : outside;
+                 : outside_q_;
     };
     // Pooled along x only, rows as in level h (row index sy ↔ raster row sy − offset).
-    std::vector<float> along_x(static_cast<size_t>(level.width) * static_cast<size_t>(level.height));
+    std::vector<uint8_t> along_x(static_cast<size_t>(level.width) * static_cast<size_t>(level.height));
     for (int sy = 0; sy < level.height; ++sy)
       for (int sx = 0; sx < level.width; ++sx) {
         const int x = sx - level.offset, y = sy - level.offset;
@@ -62,12 +77,14 @@ CorrelativeMatcher::CorrelativeMatcher(ProbabilityRaster raster, CorrelativeMatc
             std::max(get(x, y), get(x + half, y));
       }
     level.v.resize(along_x.size());
+    const size_t up = static_cast<size_t>(half) * static_cast<size_t>(level.width);
     for (int sy = 0; sy < level.height; ++sy)
       for (int sx = 0; sx < level.width; ++sx) {
         const size_t i = static_cast<size_t>(sy) * static_cast<size_t>(level.width) + static_cast<size_t>(sx);
-        const float above = sy + half < level.height ? along_x[i + static_cast<size_t>(half) * level.width] : outside;
-        level.v[i] = std::max(along_x[i], above);
+        level.v[i] = std::max(along_x[i], sy + half < level.height ? along_x[i + up] : outside_q_);
       }
+    below = level;
+    levels_.push_back(std::move(level));
   }
 }
 
@@ -106,50 +123,73 @@ std::vector<CorrelativeMatcher::Rotation> CorrelativeMatcher::discretise(std::sp
   for (int k = -lattice.angular_steps; k <= lattice.angular_steps; ++k) {
     Rotation rotation;
     rotation.theta_rad = center.theta_rad + k * lattice.angular_step_rad;
-    const Pose2 pose{center.x_m, center.y_m, rotation.theta_rad};
+    // Pose2{centre, θ_k} * p with its cosine and sine computed once per rotation
+    // (the same arithmetic, so the cells are those the lattice defines).
+    const double c = std::cos(rotation.theta_rad), s = std::sin(rotation.theta_rad);
     rotation.cells.reserve(points_robot.size());
-    for (const Eigen::Vector2d& p : points_robot) rotation.cells.push_back(raster_.cellOf(pose * p));
+    for (const Eigen::Vector2d& p : points_robot)
+      rotation.cells.push_back(
+          raster_.cellOf({center.x_m + c * p.x() - s * p.y(), center.y_m + s * p.x() + c * p.y()}));
     rotations.push_back(std::move(rotation));
   }
   return rotations;
 }
 
-double CorrelativeMatcher::meanAt(const Level& level, const Rotation& rotation, int dx, int dy) const {
-  const int ox = dx + level.offset, oy = dy + level.offset;
-  const float outside = raster_.outside_p;
-  const size_t stride = static_cast<size_t>(level.width);
+double CorrelativeMatcher::scoreAt(const Rotation& rotation, int dx, int dy) const {
   double sum = 0.0;
-  for (const Eigen::Vector2i& c : rotation.cells) {
-    const int x = c.x() + ox, y = c.y() + oy;
-    sum += static_cast<unsigned>(x) < static_cast<unsigned>(level.width) &&
-                   static_cast<unsigned>(y) < static_cast<unsigned>(level.height)
-               ? level.v[static_cast<size_t>(y) * stride + static_cast<size_t>(x)]
-               : outside;
-  }
+  for (const Eigen::Vector2i& c : rotation.cells) sum += raster_.at(c.x() + dx, c.y() + dy);
   return sum / static_cast<double>(rotation.cells.size());
+}
+
+uint32_t CorrelativeMatcher::boundAt(int h, const Rotation& rotation, int dx, int dy, uint32_t need) const {
+  const Level& level = levels_[static_cast<size_t>(h - 1)];
+  const int ox = dx + level.offset, oy = dy + level.offset;
+  const auto width = static_cast<unsigned>(level.width), height = static_cast<unsigned>(level.height);
+  const uint8_t* v = level.v.data();
+  const size_t n = rotation.cells.size();
+  uint32_t sum = 0;
+  for (size_t i = 0; i < n; ++i) {
+    const auto x = static_cast<unsigned>(rotation.cells[i].x() + ox);
+    const auto y = static_cast<unsigned>(rotation.cells[i].y() + oy);
+    sum += x < width && y < height ? v[static_cast<size_t>(y) * width + x] : outside_q_;
+    // Give up once even sure walls at every remaining point could not reach `need`.
+    if ((i & 15) == 15 && sum + 255u * static_cast<uint32_t>(n - 1 - i) < need) return sum;
+  }
+  return sum;
+}
+
+uint32_t CorrelativeMatcher::needFor(double score, size_t points) {
+  // The least quantised sum whose block may hold `score`, rounded down a
+  // little so float rounding never prunes a block that holds it.
+  return static_cast<uint32_t>(std::max(0.0, std::ceil(score * kQuanta * static_cast<double>(points) - 1e-6)));
 }
 
 void CorrelativeMatcher::descend(const std::vector<Rotation>& rotations, const Candidate& block, int linear_steps,
                                  double min_score, std::optional<Candidate>& best) const {
-  if (block.level == 0) {
-    if (!best || block.score > best->score) best = block;
-    return;
-  }
+  const Rotation& rotation = rotations[static_cast<size_t>(block.rotation)];
+  const size_t n = rotation.cells.size();
   const int level = block.level - 1;
   const int step = 1 << level;
+  const uint32_t need_min = needFor(min_score, n);
   Candidate children[4];
   int count = 0;
   for (int dy = block.dy; dy <= block.dy + step && dy <= linear_steps; dy += step)
     for (int dx = block.dx; dx <= block.dx + step && dx <= linear_steps; dx += step) {
-      Candidate child{block.rotation, dx, dy, level,
-                      meanAt(levels_[static_cast<size_t>(level)], rotations[static_cast<size_t>(block.rotation)], dx, dy)};
-      if (child.score < min_score || (best && child.score <= best->score)) continue;
+      if (level == 0) {  // a lattice pose: its exact score
+        const double score = scoreAt(rotation, dx, dy);
+        if (score >= min_score && (!best || score > best->score)) best = Candidate{block.rotation, dx, dy, 0, score};
+        continue;
+      }
+      const uint32_t need = best ? std::max(need_min, needFor(best->score, n)) : need_min;
+      const uint32_t sum = boundAt(level, rotation, dx, dy, need);
+      if (sum < need) continue;
+      const Candidate child{block.rotation, dx, dy, level, static_cast<double>(sum)};
       int at = count++;  // insertion keeps the (at most four) children sorted, best bound first
       for (; at > 0 && children[at - 1].score < child.score; --at) children[at] = children[at - 1];
       children[at] = child;
     }
   for (int i = 0; i < count; ++i) {
-    if (best && children[i].score <= best->score) break;
+    if (best && children[i].score < needFor(best->score, n)) break;
     descend(rotations, children[i], linear_steps, min_score, best);
   }
 }
@@ -167,23 +207,35 @@ std::optional<CorrelativeMatch> CorrelativeMatcher::match(std::span<const Eigen:
 
   const std::vector<Rotation> rotations = discretise(points_robot, center, lattice);
   const int linear_steps = lattice.linear_steps;
+  std::optional<Candidate> best;
   // The coarsest level worth using: one block spanning the whole window.
   int top = 0;
-  while (top + 1 < static_cast<int>(levels_.size()) && (1 << top) < 2 * linear_steps + 1) ++top;
-  const int step = 1 << top;
-  std::vector<Candidate> candidates;
-  for (int r = 0; r < static_cast<int>(rotations.size()); ++r)
+  while (top + 1 < options_.branch_levels && (1 << top) < 2 * linear_steps + 1) ++top;
+  if (top == 0) {  // no pooled level: brute force
+    for (int r = 0; r < static_cast<int>(rotations.size()); ++r)
+      for (int dy = -linear_steps; dy <= linear_steps; ++dy)
+        for (int dx = -linear_steps; dx <= linear_steps; ++dx) {
+          const double score = scoreAt(rotations[static_cast<size_t>(r)], dx, dy);
+          if (score >= min_score && (!best || score > best->score)) best = Candidate{r, dx, dy, 0, score};
+        }
+  } else {
+    const int step = 1 << top;
+    const uint32_t need = needFor(min_score, points_robot.size());
+    std::vector<Candidate> candidates;
+    // Rotations innermost: neighbouring rotations move each point by at most a
+    // cell, so they read the same cache lines.
     for (int dy = -linear_steps; dy <= linear_steps; dy += step)
-      for (int dx = -linear_steps; dx <= linear_steps; dx += step) {
-        const double bound = meanAt(levels_[static_cast<size_t>(top)], rotations[static_cast<size_t>(r)], dx, dy);
-        if (bound >= min_score) candidates.push_back({r, dx, dy, top, bound});
-      }
-  std::stable_sort(candidates.begin(), candidates.end(),
-                   [](const Candidate& a, const Candidate& b) { return a.score > b.score; });
-  std::optional<Candidate> best;
-  for (const Candidate& c : candidates) {
-    if (best && c.score <= best->score) break;
-    descend(rotations, c, linear_steps, min_score, best);
+      for (int dx = -linear_steps; dx <= linear_steps; dx += step)
+        for (int r = 0; r < static_cast<int>(rotations.size()); ++r) {
+          const uint32_t sum = boundAt(top, rotations[static_cast<size_t>(r)], dx, dy, need);
+          if (sum >= need) candidates.push_back({r, dx, dy, top, static_cast<double>(sum)});
+        }
+    std::stable_sort(candidates.begin(), candidates.end(),
+                     [](const Candidate& a, const Candidate& b) { return a.score > b.score; });
+    for (const Candidate& c : candidates) {
+      if (best && c.score < needFor(best->score, points_robot.size())) break;
+      descend(rotations, c, linear_steps, min_score, best);
+    }
   }
   if (!best) return std::nullopt;
   const double r = raster_.resolution_m;

@@ -21,6 +21,7 @@
 /// unless several tie).
 
 #include <Eigen/Core>
+#include <cstdint>
 #include <optional>
 #include <span>
 #include <vector>
@@ -85,26 +86,34 @@ class CorrelativeMatcher {
   const CorrelativeMatcherOptions& options() const { return options_; }
 
  private:
-  /// Level h: per cell (x, y), x, y ≥ −(2^h − 1), the maximum of the raster over
-  /// [x, x + 2^h) × [y, y + 2^h) (outside cells count as outside_p).
+  /// Pooled level h ≥ 1: per cell (x, y), x, y ≥ −(2^h − 1), the maximum of
+  /// the raster over [x, x + 2^h) × [y, y + 2^h) (outside cells count as
+  /// outside_p), quantised up to multiples of 1/255.
   struct Level {
     int offset = 0;  ///< 2^h − 1: stored cell (0, 0) is raster cell (−offset, −offset)
     int width = 0, height = 0;
-    std::vector<float> v;
+    std::vector<uint8_t> v;
   };
   struct Candidate;
   struct Rotation;
 
   std::vector<Rotation> discretise(std::span<const Eigen::Vector2d> points_robot, const Pose2& center,
                                    const SearchLattice& lattice) const;
-  double meanAt(const Level& level, const Rotation& rotation, int dx, int dy) const;
-  /// Depth-first, best bound first, below `block`; `best` holds the best leaf so far.
+  /// Exact lattice score of shift (dx, dy) cells at one rotation.
+  double scoreAt(const Rotation& rotation, int dx, int dy) const;
+  /// Quantised bound sum (units of 1/255) of the 2^h block of shifts from
+  /// (dx, dy); may stop early with any value below `need` once it cannot reach it.
+  uint32_t boundAt(int h, const Rotation& rotation, int dx, int dy, uint32_t need) const;
+  /// The least bound sum of a block that may hold a pose scoring `score`.
+  static uint32_t needFor(double score, size_t points);
+  /// Depth-first, best bound first, below `block` (level ≥ 1); `best` holds the best pose so far.
   void descend(const std::vector<Rotation>& rotations, const Candidate& block, int linear_steps, double min_score,
                std::optional<Candidate>& best) const;
 
   ProbabilityRaster raster_;
   CorrelativeMatcherOptions options_;
-  std::vector<Level> levels_;  ///< levels_[0] is the raster with its offset 0
+  uint8_t outside_q_ = 0;      ///< outside_p quantised up
+  std::vector<Level> levels_;  ///< levels_[h − 1] is level h
 };
 
 }  // namespace rmap::slam2d
