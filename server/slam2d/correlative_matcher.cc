@@ -9,10 +9,15 @@
 
 namespace rmap::slam2d {
 
-/// The scan's cells at one lattice rotation, relative to the centre translation.
+/// The scan at one lattice rotation, relative to the centre translation.
 struct CorrelativeMatcher::Rotation {
   double theta_rad = 0.0;
-  std::vector<Eigen::Vector2i> cells;
+  std::vector<Eigen::Vector2i> cells;  ///< per point, in the caller's order (exact scores)
+  /// For bounds: layout index of each point whose cells stay in the padded
+  /// layout at every shift of the window (no checks needed) ...
+  std::vector<int32_t> fast;
+  std::vector<Eigen::Vector2i> slow;  ///< ... the cells of the others but ...
+  uint32_t outside_sum = 0;           ///< ... those off the raster at every shift (outside_q each)
 };
 
 /// A block of 2^level × 2^level translations starting at (dx, dy) cells, at one
@@ -30,6 +35,8 @@ void CorrelativeMatcherOptions::validate() const {
                                 std::to_string(branch_levels));
   if (!(angular_step_rad >= 0.0) || !std::isfinite(angular_step_rad))
     throw std::invalid_argument("correlative matcher: angular_step_rad must be finite and ≥ 0 (0 = from the scan)");
+  if (!(fast_window_m >= 0.0) || !std::isfinite(fast_window_m))
+    throw std::invalid_argument("correlative matcher: fast_window_m must be finite and ≥ 0");
 }
 
 namespace {
@@ -51,40 +58,38 @@ CorrelativeMatcher::CorrelativeMatcher(ProbabilityRaster raster, CorrelativeMatc
   raster_.validate();
   options_.validate();
   outside_q_ = quantiseUp(raster_.outside_p);
-  Level below{0, raster_.width, raster_.height, {}};
-  below.v.reserve(raster_.p.size());
-  for (float p : raster_.p) below.v.push_back(quantiseUp(p));
+  if (options_.branch_levels == 1) return;  // brute force reads the raster only
+  const double margin = std::ceil(options_.fast_window_m / raster_.resolution_m) + (1 << (options_.branch_levels - 1));
+  const double stride = raster_.width + 2.0 * margin, rows = raster_.height + 2.0 * margin;
+  if (stride * rows >= static_cast<double>(int64_t{1} << 31))
+    throw std::invalid_argument("correlative matcher: raster of " + std::to_string(raster_.width) + " x " +
+                                std::to_string(raster_.height) + " cells padded for fast_window_m " +
+                                std::to_string(options_.fast_window_m) + " m is too large");
+  pad_ = static_cast<int>(margin);
+  stride_ = static_cast<int>(stride);
+  rows_ = static_cast<int>(rows);
+  const size_t cells = static_cast<size_t>(stride_) * static_cast<size_t>(rows_);
+  std::vector<uint8_t> below(cells, outside_q_);  // level 0
+  for (int y = 0; y < raster_.height; ++y)
+    for (int x = 0; x < raster_.width; ++x) below[static_cast<size_t>(index(x, y))] = quantiseUp(raster_.at(x, y));
   // Level h from level h−1: a 2^h window is two 2^(h−1) windows half a window
-  // apart, first along x, then along y, so each level costs O(cells).
+  // apart, first along x, then along y, so each level costs O(cells). Cells
+  // past the layout's edge are off the raster: outside_q.
   for (int h = 1; h < options_.branch_levels; ++h) {
     const int half = 1 << (h - 1);
-    Level level;
-    level.offset = (1 << h) - 1;
-    level.width = raster_.width + level.offset;
-    level.height = raster_.height + level.offset;
-    auto get = [&](int x, int y) {  // level h−1 at raster cell (x, y)
-      const int sx = x + below.offset, sy = y + below.offset;
-      return sx >= 0 && sy >= 0 && sx < below.width && sy < below.height
-                 ? below.v[static_cast<size_t>(sy) * static_cast<size_t>(below.width) + static_cast<size_t>(sx)]
-                 : outside_q_;
-    };
-    // Pooled along x only, rows as in level h (row index sy ↔ raster row sy − offset).
-    std::vector<uint8_t> along_x(static_cast<size_t>(level.width) * static_cast<size_t>(level.height));
-    for (int sy = 0; sy < level.height; ++sy)
-      for (int sx = 0; sx < level.width; ++sx) {
-        const int x = sx - level.offset, y = sy - level.offset;
-        along_x[static_cast<size_t>(sy) * static_cast<size_t>(level.width) + static_cast<size_t>(sx)] =
-            std::max(get(x, y), get(x + half, y));
+    std::vector<uint8_t> along_x(cells);
+    for (int sy = 0; sy < rows_; ++sy)
+      for (int sx = 0; sx < stride_; ++sx) {
+        const size_t i = static_cast<size_t>(sy) * static_cast<size_t>(stride_) + static_cast<size_t>(sx);
+        along_x[i] = std::max(below[i], sx + half < stride_ ? below[i + static_cast<size_t>(half)] : outside_q_);
       }
-    level.v.resize(along_x.size());
-    const size_t up = static_cast<size_t>(half) * static_cast<size_t>(level.width);
-    for (int sy = 0; sy < level.height; ++sy)
-      for (int sx = 0; sx < level.width; ++sx) {
-        const size_t i = static_cast<size_t>(sy) * static_cast<size_t>(level.width) + static_cast<size_t>(sx);
-        level.v[i] = std::max(along_x[i], sy + half < level.height ? along_x[i + up] : outside_q_);
+    const size_t up = static_cast<size_t>(half) * static_cast<size_t>(stride_);
+    for (int sy = 0; sy < rows_; ++sy)
+      for (int sx = 0; sx < stride_; ++sx) {
+        const size_t i = static_cast<size_t>(sy) * static_cast<size_t>(stride_) + static_cast<size_t>(sx);
+        below[i] = std::max(along_x[i], sy + half < rows_ ? along_x[i + up] : outside_q_);
       }
-    below = level;
-    levels_.push_back(std::move(level));
+    levels_.push_back(below);
   }
 }
 
@@ -118,6 +123,10 @@ SearchLattice CorrelativeMatcher::lattice(std::span<const Eigen::Vector2d> point
 std::vector<CorrelativeMatcher::Rotation> CorrelativeMatcher::discretise(std::span<const Eigen::Vector2d> points_robot,
                                                                          const Pose2& center,
                                                                          const SearchLattice& lattice) const {
+  const int reach = lattice.linear_steps;                      // block starts within ±reach cells
+  const int extent = (1 << (options_.branch_levels - 1)) - 1;  // a block's last cell past its start
+  auto offRaster = [&](int v, int size) { return v + reach + extent < 0 || v - reach >= size; };
+  auto inLayout = [&](int v, int size) { return v - reach >= -pad_ && v + reach < size + pad_; };
   std::vector<Rotation> rotations;
   rotations.reserve(static_cast<size_t>(2 * lattice.angular_steps + 1));
   for (int k = -lattice.angular_steps; k <= lattice.angular_steps; ++k) {
@@ -130,6 +139,17 @@ std::vector<CorrelativeMatcher::Rotation> CorrelativeMatcher::discretise(std::sp
     for (const Eigen::Vector2d& p : points_robot)
       rotation.cells.push_back(
           raster_.cellOf({center.x_m + c * p.x() - s * p.y(), center.y_m + s * p.x() + c * p.y()}));
+    if (!levels_.empty()) {
+      rotation.fast.reserve(rotation.cells.size());
+      for (const Eigen::Vector2i& cell : rotation.cells) {
+        if (offRaster(cell.x(), raster_.width) || offRaster(cell.y(), raster_.height))
+          rotation.outside_sum += outside_q_;
+        else if (inLayout(cell.x(), raster_.width) && inLayout(cell.y(), raster_.height))
+          rotation.fast.push_back(static_cast<int32_t>(index(cell.x(), cell.y())));
+        else
+          rotation.slow.push_back(cell);
+      }
+    }
     rotations.push_back(std::move(rotation));
   }
   return rotations;
@@ -142,19 +162,27 @@ double CorrelativeMatcher::scoreAt(const Rotation& rotation, int dx, int dy) con
 }
 
 uint32_t CorrelativeMatcher::boundAt(int h, const Rotation& rotation, int dx, int dy, uint32_t need) const {
-  const Level& level = levels_[static_cast<size_t>(h - 1)];
-  const int ox = dx + level.offset, oy = dy + level.offset;
-  const auto width = static_cast<unsigned>(level.width), height = static_cast<unsigned>(level.height);
-  const uint8_t* v = level.v.data();
-  const size_t n = rotation.cells.size();
-  uint32_t sum = 0;
-  for (size_t i = 0; i < n; ++i) {
-    const auto x = static_cast<unsigned>(rotation.cells[i].x() + ox);
-    const auto y = static_cast<unsigned>(rotation.cells[i].y() + oy);
-    sum += x < width && y < height ? v[static_cast<size_t>(y) * width + x] : outside_q_;
-    // Give up once even sure walls at every remaining point could not reach `need`.
-    if ((i & 15) == 15 && sum + 255u * static_cast<uint32_t>(n - 1 - i) < need) return sum;
+  const uint8_t* v = levels_[static_cast<size_t>(h - 1)].data();
+  uint32_t sum = rotation.outside_sum;
+  for (const Eigen::Vector2i& c : rotation.slow) {
+    const auto sx = static_cast<unsigned>(c.x() + dx + pad_), sy = static_cast<unsigned>(c.y() + dy + pad_);
+    sum += sx < static_cast<unsigned>(stride_) && sy < static_cast<unsigned>(rows_)
+               ? v[static_cast<size_t>(sy) * static_cast<size_t>(stride_) + sx]
+               : outside_q_;
   }
+  const ptrdiff_t shift = static_cast<ptrdiff_t>(dy) * stride_ + dx;
+  const int32_t* fast = rotation.fast.data();
+  const size_t n = rotation.fast.size();
+  constexpr size_t kChunk = 16;
+  size_t i = 0;
+  for (; i + kChunk <= n; i += kChunk) {
+    uint32_t chunk = 0;
+    for (size_t j = 0; j < kChunk; ++j) chunk += v[fast[i + j] + shift];
+    sum += chunk;
+    // Give up once even sure walls at every remaining point could not reach `need`.
+    if (sum + 255u * static_cast<uint32_t>(n - i - kChunk) < need) return sum;
+  }
+  for (; i < n; ++i) sum += v[fast[i] + shift];
   return sum;
 }
 

@@ -38,6 +38,12 @@ struct CorrelativeMatcherOptions {
   /// Rotation step δ (rad), > 0; 0 = from the scan's extent: the step that
   /// moves the farthest point by one cell (δ = acos(1 − r²/(2·d_max²))).
   double angular_step_rad = 0.0;
+  /// Windows up to ±fast_window_m read the pooled levels without bounds
+  /// checks for every point whose cells stay within this margin of the raster
+  /// (a larger window is as exact, slower). The levels are padded by it on
+  /// every side: memory (width + 2·margin)·(height + 2·margin)·(branch_levels − 1)
+  /// bytes, margin = fast_window_m / resolution + 2^(branch_levels−1). ≥ 0.
+  double fast_window_m = 5.0;
 
   /// @throws std::invalid_argument naming the first bad parameter
   void validate() const;
@@ -86,14 +92,6 @@ class CorrelativeMatcher {
   const CorrelativeMatcherOptions& options() const { return options_; }
 
  private:
-  /// Pooled level h ≥ 1: per cell (x, y), x, y ≥ −(2^h − 1), the maximum of
-  /// the raster over [x, x + 2^h) × [y, y + 2^h) (outside cells count as
-  /// outside_p), quantised up to multiples of 1/255.
-  struct Level {
-    int offset = 0;  ///< 2^h − 1: stored cell (0, 0) is raster cell (−offset, −offset)
-    int width = 0, height = 0;
-    std::vector<uint8_t> v;
-  };
   struct Candidate;
   struct Rotation;
 
@@ -110,10 +108,21 @@ class CorrelativeMatcher {
   void descend(const std::vector<Rotation>& rotations, const Candidate& block, int linear_steps, double min_score,
                std::optional<Candidate>& best) const;
 
+  /// Index of raster cell (x, y) in the padded layout of the pooled levels.
+  int64_t index(int x, int y) const {
+    return (static_cast<int64_t>(y) + pad_) * stride_ + (static_cast<int64_t>(x) + pad_);
+  }
+
   ProbabilityRaster raster_;
   CorrelativeMatcherOptions options_;
-  uint8_t outside_q_ = 0;      ///< outside_p quantised up
-  std::vector<Level> levels_;  ///< levels_[h − 1] is level h
+  uint8_t outside_q_ = 0;  ///< outside_p quantised up
+  /// Layout shared by the pooled levels: stored cell (sx, sy) is raster cell
+  /// (sx − pad, sy − pad), stride × rows cells, pad on every side.
+  int pad_ = 0, stride_ = 0, rows_ = 0;
+  /// levels_[h − 1] is pooled level h ≥ 1: per cell (x, y) the maximum of the
+  /// raster over [x, x + 2^h) × [y, y + 2^h) (outside_p off the raster),
+  /// quantised up to multiples of 1/255.
+  std::vector<std::vector<uint8_t>> levels_;
 };
 
 }  // namespace rmap::slam2d

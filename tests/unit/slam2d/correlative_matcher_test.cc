@@ -6,6 +6,7 @@
 #include <numbers>
 #include <random>
 #include <stdexcept>
+#include <utility>
 #include <vector>
 
 #include "sim_scans.h"
@@ -85,15 +86,17 @@ TEST(CorrelativeMatcher, EqualsBruteForceOnRandomRasters) {
     for (int n = 0; n < 20 + trial; ++n) points.push_back({1.6 * u(rng), 1.6 * u(rng)});
     const Pose2 center{1.2 + 0.5 * u(rng), 1.5 + 0.5 * u(rng), std::numbers::pi * u(rng)};
     const double window_m = 0.45 + 0.2 * (trial % 4), window_rad = 0.3 * (trial % 3);
-    for (int levels : {1, 2, 3, 7}) {
+    // fast_window_m 0: most points take the checked path; 5 m: all do not.
+    for (const auto& [levels, fast_window_m] : {std::pair{1, 5.0}, {2, 5.0}, {3, 0.0}, {3, 5.0}, {7, 0.0}, {7, 5.0}}) {
       CorrelativeMatcherOptions options;
       options.branch_levels = levels;
+      options.fast_window_m = fast_window_m;
       options.angular_step_rad = trial % 2 == 0 ? 0.0 : 0.07;
       const CorrelativeMatcher matcher(raster, options);
       const double expected = bruteForceBest(matcher, points, center, window_m, window_rad);
       const std::optional<CorrelativeMatch> m = matcher.match(points, center, window_m, window_rad, 0.0);
-      ASSERT_TRUE(m) << "trial " << trial << " levels " << levels;
-      EXPECT_EQ(m->score, expected) << "trial " << trial << " levels " << levels;
+      ASSERT_TRUE(m) << "trial " << trial << " levels " << levels << " fast " << fast_window_m;
+      EXPECT_EQ(m->score, expected) << "trial " << trial << " levels " << levels << " fast " << fast_window_m;
       // The pose is on the lattice and scores what the match says.
       const double r = raster.resolution_m;
       const int i = static_cast<int>(std::lround((m->pose.x_m - center.x_m) / r));
@@ -217,6 +220,9 @@ TEST(CorrelativeMatcher, RejectsBadWindowsAndOptions) {
   EXPECT_THROW(CorrelativeMatcher(roomRaster(2.025), options), std::invalid_argument);
   options = {};
   options.angular_step_rad = -0.01;
+  EXPECT_THROW(CorrelativeMatcher(roomRaster(2.025), options), std::invalid_argument);
+  options = {};
+  options.fast_window_m = -1.0;
   EXPECT_THROW(CorrelativeMatcher(roomRaster(2.025), options), std::invalid_argument);
   ProbabilityRaster broken = roomRaster(2.025);
   broken.p.pop_back();
