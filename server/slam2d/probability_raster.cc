@@ -16,11 +16,6 @@ void checkUnknown(float unknown_p) {
 
 }  // namespace
 
-Eigen::Vector2i ProbabilityRaster::cellOf(const Eigen::Vector2d& p_m) const {
-  return {static_cast<int>(std::floor((p_m.x() - origin_m.x()) / resolution_m)),
-          static_cast<int>(std::floor((p_m.y() - origin_m.y()) / resolution_m))};
-}
-
 void ProbabilityRaster::validate() const {
   if (!(resolution_m > 0.0) || !std::isfinite(resolution_m))
     throw std::invalid_argument("probability raster: resolution_m must be finite and > 0");

@@ -10,6 +10,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <cmath>
 #include <span>
 #include <vector>
 
@@ -35,8 +36,12 @@ struct ProbabilityRaster {
                ? p[static_cast<size_t>(y) * static_cast<size_t>(width) + static_cast<size_t>(x)]
                : outside_p;
   }
-  /// Cell holding a map-frame point (m): floor((p − origin) / resolution).
-  Eigen::Vector2i cellOf(const Eigen::Vector2d& p_m) const;
+  /// Cell holding a map-frame point (m): floor((p − origin) · (1 / resolution)).
+  Eigen::Vector2i cellOf(const Eigen::Vector2d& p_m) const {
+    const double inv = 1.0 / resolution_m;
+    return {static_cast<int>(std::floor((p_m.x() - origin_m.x()) * inv)),
+            static_cast<int>(std::floor((p_m.y() - origin_m.y()) * inv))};
+  }
   /// @throws std::invalid_argument naming the first broken invariant (size,
   ///         resolution, a probability outside [0, 1] or not finite)
   void validate() const;
