@@ -72,6 +72,7 @@ CorrelativeMatcher::CorrelativeMatcher(ProbabilityRaster raster, CorrelativeMatc
   std::vector<uint8_t> below(cells, outside_q_);  // level 0
   for (int y = 0; y < raster_.height; ++y)
     for (int x = 0; x < raster_.width; ++x) below[static_cast<size_t>(index(x, y))] = quantiseUp(raster_.at(x, y));
+  levels_.push_back(below);
   // Level h from level h−1: a 2^h window is two 2^(h−1) windows half a window
   // apart, first along x, then along y, so each level costs O(cells). Cells
   // past the layout's edge are off the raster: outside_q.
@@ -162,7 +163,7 @@ double CorrelativeMatcher::scoreAt(const Rotation& rotation, int dx, int dy) con
 }
 
 uint32_t CorrelativeMatcher::boundAt(int h, const Rotation& rotation, int dx, int dy, uint32_t need) const {
-  const uint8_t* v = levels_[static_cast<size_t>(h - 1)].data();
+  const uint8_t* v = levels_[static_cast<size_t>(h)].data();
   uint32_t sum = rotation.outside_sum;
   for (const Eigen::Vector2i& c : rotation.slow) {
     const auto sx = static_cast<unsigned>(c.x() + dx + pad_), sy = static_cast<unsigned>(c.y() + dy + pad_);
@@ -203,7 +204,9 @@ void CorrelativeMatcher::descend(const std::vector<Rotation>& rotations, const C
   int count = 0;
   for (int dy = block.dy; dy <= block.dy + step && dy <= linear_steps; dy += step)
     for (int dx = block.dx; dx <= block.dx + step && dx <= linear_steps; dx += step) {
-      if (level == 0) {  // a lattice pose: its exact score
+      if (level == 0) {  // a lattice pose: its exact score, when its quantised one may reach
+        const uint32_t need = best ? std::max(need_min, needFor(best->score, n)) : need_min;
+        if (boundAt(0, rotation, dx, dy, need) < need) continue;
         const double score = scoreAt(rotation, dx, dy);
         if (score >= min_score && (!best || score > best->score)) best = Candidate{block.rotation, dx, dy, 0, score};
         continue;

@@ -41,7 +41,7 @@ struct CorrelativeMatcherOptions {
   /// Windows up to ±fast_window_m read the pooled levels without bounds
   /// checks for every point whose cells stay within this margin of the raster
   /// (a larger window is as exact, slower). The levels are padded by it on
-  /// every side: memory (width + 2·margin)·(height + 2·margin)·(branch_levels − 1)
+  /// every side: memory (width + 2·margin)·(height + 2·margin)·branch_levels
   /// bytes, margin = fast_window_m / resolution + 2^(branch_levels−1). ≥ 0.
   double fast_window_m = 5.0;
 
@@ -99,7 +99,7 @@ class CorrelativeMatcher {
                                    const SearchLattice& lattice) const;
   /// Exact lattice score of shift (dx, dy) cells at one rotation.
   double scoreAt(const Rotation& rotation, int dx, int dy) const;
-  /// Quantised bound sum (units of 1/255) of the 2^h block of shifts from
+  /// Quantised bound sum (units of 1/255, h ≥ 0) of the 2^h block of shifts from
   /// (dx, dy); may stop early with any value below `need` once it cannot reach it.
   uint32_t boundAt(int h, const Rotation& rotation, int dx, int dy, uint32_t need) const;
   /// The least bound sum of a block that may hold a pose scoring `score`.
@@ -119,9 +119,9 @@ class CorrelativeMatcher {
   /// Layout shared by the pooled levels: stored cell (sx, sy) is raster cell
   /// (sx − pad, sy − pad), stride × rows cells, pad on every side.
   int pad_ = 0, stride_ = 0, rows_ = 0;
-  /// levels_[h − 1] is pooled level h ≥ 1: per cell (x, y) the maximum of the
-  /// raster over [x, x + 2^h) × [y, y + 2^h) (outside_p off the raster),
-  /// quantised up to multiples of 1/255.
+  /// levels_[h] is pooled level h: per cell (x, y) the maximum of the raster
+  /// over [x, x + 2^h) × [y, y + 2^h) (outside_p off the raster), quantised up
+  /// to multiples of 1/255 (level 0 screens lattice poses before their exact score).
   std::vector<std::vector<uint8_t>> levels_;
 };
 
