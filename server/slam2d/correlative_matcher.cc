@@ -136,20 +136,23 @@ std::vector<CorrelativeMatcher::Rotation> CorrelativeMatcher::discretise(std::sp
     // Pose2{centre, θ_k} * p with its cosine and sine computed once per rotation
     // (the same arithmetic, so the cells are those the lattice defines).
     const double c = std::cos(rotation.theta_rad), s = std::sin(rotation.theta_rad);
-    rotation.cells.reserve(points_robot.size());
-    for (const Eigen::Vector2d& p : points_robot)
-      rotation.cells.push_back(
-          raster_.cellOf({center.x_m + c * p.x() - s * p.y(), center.y_m + s * p.x() + c * p.y()}));
+    rotation.cells.resize(points_robot.size());
+    for (size_t i = 0; i < points_robot.size(); ++i) {
+      const Eigen::Vector2d& p = points_robot[i];
+      rotation.cells[i] = raster_.cellOf({center.x_m + c * p.x() - s * p.y(), center.y_m + s * p.x() + c * p.y()});
+    }
     if (!levels_.empty()) {
-      rotation.fast.reserve(rotation.cells.size());
+      rotation.fast.resize(rotation.cells.size());
+      size_t fast = 0;
       for (const Eigen::Vector2i& cell : rotation.cells) {
         if (offRaster(cell.x(), raster_.width) || offRaster(cell.y(), raster_.height))
           rotation.outside_sum += outside_q_;
         else if (inLayout(cell.x(), raster_.width) && inLayout(cell.y(), raster_.height))
-          rotation.fast.push_back(static_cast<int32_t>(index(cell.x(), cell.y())));
+          rotation.fast[fast++] = static_cast<int32_t>(index(cell.x(), cell.y()));
         else
           rotation.slow.push_back(cell);
       }
+      rotation.fast.resize(fast);
     }
     rotations.push_back(std::move(rotation));
   }

@@ -44,7 +44,7 @@ struct ProbabilityRaster {
   }
   /// floor(v) as an int, without the libm call (the matcher floors ~10⁶ values per search).
   static int floorToInt(double v) {
-    v = std::clamp(v, -1e9, 1e9);
+    v = std::min(std::max(v, -1e9), 1e9);  // not std::clamp: this form compiles to minsd/maxsd
     const int i = static_cast<int>(v);  // truncates toward zero
     return v < i ? i - 1 : i;
   }
