@@ -238,6 +238,11 @@ std::optional<CorrelativeMatch> CorrelativeMatcher::match(std::span<const Eigen:
   for (const Eigen::Vector2d& p : points_robot)
     if (!p.allFinite()) throw std::invalid_argument("correlative matcher: a point is not finite");
   if (points_robot.empty()) return std::nullopt;
+  const int64_t point_rotations = static_cast<int64_t>(points_robot.size()) * (2 * int64_t{lattice.angular_steps} + 1);
+  if (point_rotations > kMaxPointRotations)
+    throw std::invalid_argument("correlative matcher: " + std::to_string(points_robot.size()) + " points × " +
+                                std::to_string(2 * lattice.angular_steps + 1) + " rotations is over " +
+                                std::to_string(kMaxPointRotations) + "; subsample the points or set angular_step_rad");
 
   const std::vector<Rotation> rotations = discretise(points_robot, center, lattice);
   const int linear_steps = lattice.linear_steps;

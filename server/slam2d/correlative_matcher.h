@@ -66,6 +66,9 @@ class CorrelativeMatcher {
   /// Largest accepted window half-width in cells (L), which bounds memory and
   /// keeps cell arithmetic far from integer overflow.
   static constexpr int kMaxLinearSteps = 1 << 14;
+  /// Largest accepted points × rotations of one search: the discretised scan
+  /// takes about 12 bytes per point and rotation (2^24: 200 MB).
+  static constexpr int64_t kMaxPointRotations = int64_t{1} << 24;
 
   /// Precomputes the max-pooled levels of `raster` (O(cells · levels) time
   /// and memory).
@@ -79,8 +82,11 @@ class CorrelativeMatcher {
   /// @param window_m  ≥ 0, at most kMaxLinearSteps cells
   /// @param window_rad  in [0, π]
   /// @param min_score  in [0, 1]
-  /// @throws std::invalid_argument for a bad window or min_score, or a
-  ///         non-finite point or centre
+  /// @throws std::invalid_argument for a bad window or min_score, a
+  ///         non-finite point or centre, or more than kMaxPointRotations
+  ///         points × rotations (far points make the step fine: subsample, or
+  ///         set angular_step_rad)
+  /// Concurrent calls are safe (no state changes).
   std::optional<CorrelativeMatch> match(std::span<const Eigen::Vector2d> points_robot, const Pose2& center,
                                         double window_m, double window_rad, double min_score) const;
 

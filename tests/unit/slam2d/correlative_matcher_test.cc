@@ -212,6 +212,10 @@ TEST(CorrelativeMatcher, RejectsBadWindowsAndOptions) {
   bad[3].x() = NAN;
   EXPECT_THROW(matcher.match(bad, Pose2{}, 1.0, 0.5, 0.5), std::invalid_argument);
   EXPECT_NO_THROW(matcher.match(scan, Pose2{}, 0.0, std::numbers::pi, 0.5));
+  // A point 10 km away makes the extent-derived step 5 µrad: too many rotations.
+  std::vector<Eigen::Vector2d> far = scan;
+  far.push_back({1e4, 0.0});
+  EXPECT_THROW(matcher.match(far, Pose2{}, 0.5, std::numbers::pi, 0.5), std::invalid_argument);
 
   CorrelativeMatcherOptions options;
   options.branch_levels = 0;
