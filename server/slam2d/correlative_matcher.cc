@@ -44,6 +44,8 @@ namespace {
 /// Bounds are sums of probabilities quantised up to 1/255, so a level is a
 /// quarter of the floats' memory and its sums are exact integers.
 constexpr double kQuanta = 255.0;
+// Bound sums (at most 255 per point) stay within uint32_t for any accepted search.
+static_assert(255 * CorrelativeMatcher::kMaxPointRotations < (int64_t{1} << 32));
 
 uint8_t quantiseUp(float p) {
   auto q = static_cast<int>(std::ceil(static_cast<double>(p) * kQuanta));
