@@ -84,6 +84,11 @@ TEST(CorrelativeMatcher, EqualsBruteForceOnRandomRasters) {
     const ProbabilityRaster raster = randomRaster(rng, 37 + trial, 29);
     std::vector<Eigen::Vector2d> points;
     for (int n = 0; n < 20 + trial; ++n) points.push_back({1.6 * u(rng), 1.6 * u(rng)});
+    // With a fixed angular step (else they would make it fine and the brute
+    // force slow): a few points off the raster at every shift (they score
+    // outside_p whatever the pose).
+    if (trial % 2 == 1)
+      for (int n = 0; n < 3; ++n) points.push_back({5.0 * u(rng) + (u(rng) > 0 ? 20.0 : -20.0), 4.0 * u(rng)});
     const Pose2 center{1.2 + 0.5 * u(rng), 1.5 + 0.5 * u(rng), std::numbers::pi * u(rng)};
     const double window_m = 0.45 + 0.2 * (trial % 4), window_rad = 0.3 * (trial % 3);
     // fast_window_m 0: most points take the checked path; 5 m: all do not.
