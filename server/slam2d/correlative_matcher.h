@@ -7,16 +7,18 @@
 /// The search lattice (SearchLattice) is every rotation θ_k = θ_c + k·δ,
 /// |k| ≤ K, times every translation t_c + (i, j)·resolution, |i|, |j| ≤ L,
 /// around the centre pose c. At rotation k a point p falls in the cell
-/// c_k(p) = floor((R(θ_k)·p + t_c − origin) / resolution), and the score of
+/// c_k(p) = ProbabilityRaster::cellOf(R(θ_k)·p + t_c), and the score of
 /// lattice pose (k, i, j) is the mean over the points of the raster value at
 /// c_k(p) + (i, j): the mean occupancy probability of the cells the scan's
 /// endpoints hit, in [0, 1].
 ///
 /// The matcher precomputes max-pooled levels of the raster (level h holds,
 /// per cell, the maximum over the 2^h × 2^h cells above and to the right of
-/// it), so the score of a 2^h × 2^h block of translations is bounded from
-/// above by one lookup per point, and searches depth first, best bound first,
-/// pruning blocks whose bound cannot beat the best pose found or min_score.
+/// it, rounded up to 1/255 in a byte), so the score of a 2^h × 2^h block of
+/// translations is bounded from above by one lookup per point, and searches
+/// depth first, best bound first, pruning blocks whose bound cannot beat the
+/// best pose found or reach min_score; lattice poses that pass their level-0
+/// bound get their exact score from the float raster.
 /// The result equals brute force over the lattice (same score; the same pose
 /// unless several tie).
 
