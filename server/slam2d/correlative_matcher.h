@@ -102,6 +102,7 @@ class CorrelativeMatcher {
  private:
   struct Candidate;
   struct Rotation;
+  struct RotationGroup;
 
   std::vector<Rotation> discretise(std::span<const Eigen::Vector2d> points_robot, const Pose2& center,
                                    const SearchLattice& lattice) const;
@@ -110,6 +111,10 @@ class CorrelativeMatcher {
   /// Quantised bound sum (units of 1/255, h ≥ 0) of the 2^h block of shifts from
   /// (dx, dy); may stop early with any value below `need` once it cannot reach it.
   uint32_t boundAt(int h, const Rotation& rotation, int dx, int dy, uint32_t need) const;
+  /// Groups of `size` consecutive rotations for bounds at level `top` over shifts within ±reach.
+  std::vector<RotationGroup> group(const std::vector<Rotation>& rotations, int size, int top, int reach) const;
+  /// Quantised bound sum of a 2^h block of shifts from (dx, dy) over a group's rotations (as boundAt).
+  uint32_t groupBoundAt(int h, const RotationGroup& group, int dx, int dy, uint32_t need) const;
   /// The least bound sum of a block that may hold a pose scoring `score`.
   static uint32_t needFor(double score, size_t points);
   /// Depth-first, best bound first, below `block` (level ≥ 1); `best` holds the best pose so far.
