@@ -348,8 +348,9 @@ std::optional<CorrelativeMatch> CorrelativeMatcher::match(std::span<const Eigen:
       }
     };
     // A group of rotations moves the farthest point by about one cell per
-    // rotation: a quarter of a top block keeps the widened bound tight.
-    const int group_size = top >= 3 ? 1 << (top - 2) : 1;
+    // rotation: half a top block widens the bound little (measured: groups of
+    // 2^(top−1) and 2^top about equal, 2^(top−2) 10 % and 2^(top−3) 25 % slower).
+    const int group_size = top >= 2 ? 1 << (top - 1) : 1;
     if (group_size > 1 && static_cast<int>(rotations.size()) >= 2 * group_size) {
       const std::vector<RotationGroup> groups = group(rotations, group_size, top, linear_steps);
       std::vector<Candidate> blocks;  // `rotation` indexes groups here

@@ -18,7 +18,10 @@
 /// translations is bounded from above by one lookup per point, and searches
 /// depth first, best bound first, pruning blocks whose bound cannot beat the
 /// best pose found or reach min_score; lattice poses that pass their level-0
-/// bound get their exact score from the float raster.
+/// bound get their exact score from the float raster. At the coarsest level,
+/// groups of consecutive rotations are bounded together first (per point, the
+/// box of its cells over the group), so most rotations of a wide angular
+/// window are never bounded one by one.
 /// The result equals brute force over the lattice (same score; the same pose
 /// unless several tie).
 
