@@ -7,7 +7,10 @@
 #include <cmath>
 #include <map>
 
+#include "app/camera_frames.h"
 #include "app/ingest.h"
+#include "loop/panorama.h"
+#include "loop/reflectivity_patch.h"
 #include "map3d/map_file.h"
 
 namespace rmap::app {
@@ -17,6 +20,8 @@ namespace {
 using Clock = std::chrono::steady_clock;
 constexpr auto kPoseFlushPeriod = std::chrono::milliseconds(500);
 constexpr size_t kPoseFlushCount = 512;
+/// Travel between two reflectivity patches of a 2D-laser robot (the default patch spans 8 m).
+constexpr double kPatchSpacing_m = 0.5;
 
 store::TrajectoryPose toTrajectoryPose(const RobotPose& p) {
   store::TrajectoryPose t;
@@ -49,7 +54,7 @@ int64_t nowNs() {
 
 MapWorker::MapWorker(std::string name, std::unique_ptr<map3d::CuboidMap> map, int64_t applied_id,
                      const Config& config, store::Store& store, Metrics& metrics, PoseSink pose_sink,
-                     Slam2dInputs slam2d)
+                     Slam2dInputs slam2d, LoopInputs loop)
     : name_(std::move(name)),
       map_(std::move(map)),
       config_(config),
@@ -60,6 +65,9 @@ MapWorker::MapWorker(std::string name, std::unique_ptr<map3d::CuboidMap> map, in
       sensors_(slam2d.sensors),
       estimate_sink_(std::move(slam2d.estimate_sink)),
       slam_first_input_id_(slam2d.first_input_id),
+      loop_first_input_id_(loop.first_input_id),
+      loop_feed_(std::make_unique<LoopClosureFeed>(name_, loop.recognizers, std::move(loop.sink), metrics,
+                                                   kLoopQueueFrames)),
       restored_id_(applied_id),
       applied_id_(applied_id),
       snapshot_id_(applied_id),
@@ -76,6 +84,7 @@ void MapWorker::stop() {
   }
   wake_.notify_all();
   if (thread_.joinable()) thread_.join();
+  loop_feed_->stop();  // after the worker: nothing queues frames any more
   try {
     flushTrajectories();
     writeSnapshot();
@@ -102,12 +111,30 @@ size_t MapWorker::queueDepth() const {
 
 int64_t MapWorker::appliedId() const { return applied_id_.load(); }
 
+size_t MapWorker::loopQueueDepth() const { return loop_feed_->queued(); }
+
+void MapWorker::drainLoopClosures() { loop_feed_->drain(); }
+
 void MapWorker::applyNow(int64_t log_id, const v1::RobotMessage& message, const std::string& robot_id) {
   apply(log_id, message, robot_id, false);
 }
 
 int64_t MapWorker::replayFromId() const {
-  return slam_first_input_id_ > 0 ? std::min(restored_id_, slam_first_input_id_ - 1) : restored_id_;
+  int64_t from = restored_id_;
+  for (const int64_t first : {slam_first_input_id_, loop_first_input_id_}) {
+    if (first > 0) from = std::min(from, first - 1);
+  }
+  return from;
+}
+
+bool MapWorker::replaysBelowSnapshot(int32_t kind) const {
+  switch (kind) {
+    case v1::RobotMessage::kScan:
+    case v1::RobotMessage::kOdometry: return true;
+    case v1::RobotMessage::kImage: return loop_feed_->accepts(FrameKind::kCamera);
+    case v1::RobotMessage::kCloud: return loop_feed_->accepts(FrameKind::kIntensityPanorama);
+    default: return false;
+  }
 }
 
 void MapWorker::run() {
@@ -153,30 +180,21 @@ void MapWorker::apply(int64_t log_id, const v1::RobotMessage& message, const std
   const bool in_map3d = log_id <= restored_id_;
   if (message.body_case() == v1::RobotMessage::kScan) {
     noteSlamInput(log_id);
-    applyScan(message, robot_id, in_map3d, live);
+    applyScan(log_id, message, robot_id, in_map3d, live);
   } else if (message.body_case() == v1::RobotMessage::kOdometry) {
     noteSlamInput(log_id);
     slam2d_.addOdometry(robot_id, message.odometry());
-  } else if (in_map3d) {
-    return;  // recovery below the snapshot replays the 2D SLAM's inputs only
+  } else if (message.body_case() == v1::RobotMessage::kImage) {
+    feedImage(log_id, message, robot_id);
+    if (!in_map3d && message.image().has_camera_pose()) {
+      publishPose({robot_id, name_, message.seq(), message.image().stamp_ns(),
+                   toIsometry(message.image().camera_pose())});
+    }
   } else if (message.body_case() == v1::RobotMessage::kCloud) {
-    const v1::PointCloud& cloud = message.cloud();
-    const CloudInMap in_map = cloudInMap(cloud);
-    map3d::InsertOptions options;
-    options.threads = config_.maps.insert_threads;
-    // Points outside the addressable range are dropped rather than refusing a whole durable message.
-    options.invalid_points = map3d::InvalidPoints::kSkip;
-    const map3d::ScanStats stats = map_->insertScan(sensorOrigin(cloud), in_map.points_m, options);
-    metrics_.points_integrated.fetch_add(stats.points - stats.rejected_points, std::memory_order_relaxed);
-    const RobotPose pose{robot_id, name_, message.seq(), cloud.stamp_ns(), in_map.sensor_pose};
-    pending_poses_.emplace_back(robot_id, toTrajectoryPose(pose));
-    if (pose_sink_) pose_sink_(pose);
-  } else if (message.body_case() == v1::RobotMessage::kImage && message.image().has_camera_pose()) {
-    const RobotPose pose{robot_id, name_, message.seq(), message.image().stamp_ns(),
-                         toIsometry(message.image().camera_pose())};
-    if (pose_sink_) pose_sink_(pose);
+    feedCloud(log_id, message, robot_id);
+    // Below the snapshot, recovery replays the inputs of the 2D SLAM and place recognition only.
+    if (!in_map3d) applyCloud(message, robot_id);
   }
-  // Images are durable and ordered here; loop closure consumes them in a later stage.
   if (log_id > applied_id_.load()) applied_id_.store(log_id);
 }
 
@@ -187,11 +205,98 @@ void MapWorker::noteSlamInput(int64_t log_id) {
   slam_first_input_id_ = log_id;
 }
 
-void MapWorker::applyScan(const v1::RobotMessage& message, const std::string& robot_id, bool in_map3d, bool live) {
+void MapWorker::applyCloud(const v1::RobotMessage& message, const std::string& robot_id) {
+  const v1::PointCloud& cloud = message.cloud();
+  const CloudInMap in_map = cloudInMap(cloud);
+  map3d::InsertOptions options;
+  options.threads = config_.maps.insert_threads;
+  // Points outside the addressable range are dropped rather than refusing a whole durable message.
+  options.invalid_points = map3d::InvalidPoints::kSkip;
+  const map3d::ScanStats stats = map_->insertScan(sensorOrigin(cloud), in_map.points_m, options);
+  metrics_.points_integrated.fetch_add(stats.points - stats.rejected_points, std::memory_order_relaxed);
+  const RobotPose pose{robot_id, name_, message.seq(), cloud.stamp_ns(), in_map.sensor_pose};
+  pending_poses_.emplace_back(robot_id, toTrajectoryPose(pose));
+  publishPose(pose);
+}
+
+void MapWorker::noteLoopInput(int64_t log_id) {
+  if (loop_first_input_id_ > 0) return;
+  store_.appendEvent({0, name_, kLoopInputEvent, nowNs(), nlohmann::json{{"message_id", log_id}}.dump()});
+  loop_first_input_id_ = log_id;
+}
+
+void MapWorker::publishPose(const RobotPose& pose) {
+  last_poses_[pose.robot_id] = pose;
+  if (pose_sink_) pose_sink_(pose);
+}
+
+void MapWorker::feedImage(int64_t log_id, const v1::RobotMessage& message, const std::string& robot_id) {
+  if (!loop_feed_->accepts(FrameKind::kCamera)) return;
+  noteLoopInput(log_id);
+  const v1::CameraImage& image = message.image();
+  // The camera's pose when the image carries one, else the robot's latest.
+  LoopPlace place{robot_id, image.stamp_ns(), std::nullopt};
+  if (image.has_camera_pose()) {
+    place.pose = toIsometry(image.camera_pose());
+  } else if (const auto it = last_poses_.find(robot_id); it != last_poses_.end()) {
+    place.pose = it->second.pose;
+  }
+  // Decoded on the feed's thread, from a copy: the message goes once it is applied.
+  auto copy = std::make_shared<const v1::CameraImage>(image);
+  loop_feed_->push({FrameKind::kCamera, std::move(place), [copy] { return cameraGray(*copy); }});
+}
+
+void MapWorker::feedCloud(int64_t log_id, const v1::RobotMessage& message, const std::string& robot_id) {
+  const v1::PointCloud& cloud = message.cloud();
+  if (cloud.intensities().empty() || !loop_feed_->accepts(FrameKind::kIntensityPanorama)) return;
+  noteLoopInput(log_id);
+  const Eigen::Isometry3d sensor_pose = toIsometry(cloud.sensor_pose());
+  // Projected on the feed's thread, from a copy: the message goes once it is applied.
+  auto copy = std::make_shared<const v1::PointCloud>(cloud);
+  loop_feed_->push({FrameKind::kIntensityPanorama, {robot_id, cloud.stamp_ns(), sensor_pose}, [copy, sensor_pose] {
+                      // The panorama is taken around the sensor: points in its frame.
+                      const Eigen::Isometry3f to_sensor = copy->frame() == v1::PointCloud::MAP
+                                                              ? sensor_pose.inverse().cast<float>()
+                                                              : Eigen::Isometry3f::Identity();
+                      const int n = copy->xyz_m_size() / 3;
+                      std::vector<Eigen::Vector3f> points(static_cast<size_t>(n));
+                      for (int i = 0; i < n; ++i) {
+                        points[i] = to_sensor * Eigen::Vector3f(copy->xyz_m(3 * i), copy->xyz_m(3 * i + 1),
+                                                                copy->xyz_m(3 * i + 2));
+                      }
+                      return loop::projectPanorama(
+                          points, std::span<const float>(copy->intensities().data(), copy->intensities().size()),
+                          loop::PanoramaOptions{});
+                    }});
+}
+
+void MapWorker::feedPatch(int64_t log_id, const std::string& robot_id, int64_t stamp_ns,
+                          const slam2d::Pose2& base_pose) {
+  if (!loop_feed_->accepts(FrameKind::kReflectivityPatch)) return;
+  // A patch every kPatchSpacing_m of travel: nearer ones show the same place.
+  const auto last = last_patch_.find(robot_id);
+  if (last != last_patch_.end() &&
+      (Eigen::Vector2d(base_pose.x_m, base_pose.y_m) - Eigen::Vector2d(last->second.x_m, last->second.y_m)).norm() <
+          kPatchSpacing_m) {
+    return;
+  }
+  last_patch_[robot_id] = base_pose;
+  noteLoopInput(log_id);
+  // Rendered now: the 2D map changes with the next scans.
+  cv::Mat patch = slam2d_.reflectivityPatch(base_pose, loop::PatchOptions{});
+  loop_feed_->push({FrameKind::kReflectivityPatch,
+                    {robot_id, stamp_ns, planarIsometry(base_pose, 0.0)},
+                    [patch = std::move(patch)] { return patch; }});
+}
+
+void MapWorker::applyScan(int64_t log_id, const v1::RobotMessage& message, const std::string& robot_id,
+                          bool in_map3d, bool live) {
   const v1::LaserScan2D& scan = message.scan();
   const std::optional<Laser2dSetup> laser = sensors_.laser(robot_id, message.seq(), scan.sensor());
   const std::optional<Slam2dResult> result = slam2d_.addScan(robot_id, scan, laser);
-  if (!result || in_map3d) return;
+  if (!result) return;
+  feedPatch(log_id, robot_id, scan.stamp_ns(), result->base_pose);
+  if (in_map3d) return;
   // The scan in the 3D map: a planar cloud at the laser's mounting height above the map's z = 0.
   const double height_m = laser ? laser->z_m : 0.0;
   const slam2d::Pose2& sensor = result->sensor_pose;
@@ -217,7 +322,7 @@ void MapWorker::applyScan(const v1::RobotMessage& message, const std::string& ro
   }
   const RobotPose pose{robot_id, name_, message.seq(), scan.stamp_ns(), planarIsometry(result->base_pose, 0.0)};
   pending_poses_.emplace_back(robot_id, toTrajectoryPose(pose));
-  if (pose_sink_) pose_sink_(pose);
+  publishPose(pose);
   if (live && estimate_sink_) {
     v1::PoseEstimate estimate;
     estimate.set_seq(message.seq());

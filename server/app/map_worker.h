@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <deque>
 #include <functional>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -18,6 +19,7 @@
 #include <vector>
 
 #include "app/config.h"
+#include "app/loop_closure_feed.h"
 #include "app/metrics.h"
 #include "app/robot_sensors.h"
 #include "app/slam2d_layer.h"
@@ -31,6 +33,10 @@ namespace rmap::app {
 /// Event kind marking the first message that fed a map's 2D SLAM ({"message_id": id}):
 /// recovery replays the SLAM from there, also below the 3D snapshot.
 inline constexpr const char* kSlam2dInputEvent = "slam2d_input";
+/// The same for the first frame that fed a map's place recognition.
+inline constexpr const char* kLoopInputEvent = "loop_input";
+/// Frames waiting for place recognition at most, per map (see LoopClosureFeed).
+inline constexpr size_t kLoopQueueFrames = 16;
 
 /// A robot pose a message placed in the map.
 struct RobotPose {
@@ -56,10 +62,18 @@ class MapWorker {
     int64_t first_input_id = 0;
   };
 
+  /// What loop closure of a map needs from the service.
+  struct LoopInputs {
+    const RecognizerFactory& recognizers;
+    LoopClosureSink sink;
+    /// Log id of the first message that fed this map's place recognition (kLoopInputEvent), 0 when none yet.
+    int64_t first_input_id = 0;
+  };
+
   /// @param map            the map (from a snapshot or new)
   /// @param applied_id     log id already in `map` (the snapshot's), 0 for a new map
   MapWorker(std::string name, std::unique_ptr<map3d::CuboidMap> map, int64_t applied_id, const Config& config,
-            store::Store& store, Metrics& metrics, PoseSink pose_sink, Slam2dInputs slam2d);
+            store::Store& store, Metrics& metrics, PoseSink pose_sink, Slam2dInputs slam2d, LoopInputs loop);
   /// stop().
   ~MapWorker();
   MapWorker(const MapWorker&) = delete;
@@ -68,8 +82,12 @@ class MapWorker {
   /// Applies a message synchronously on the caller's thread (recovery, before start()).
   /// A message at or below the snapshot's id only feeds the 2D SLAM, which has no snapshot.
   void applyNow(int64_t log_id, const v1::RobotMessage& message, const std::string& robot_id);
-  /// Where recovery starts reading the log: after the snapshot, or earlier for the 2D SLAM.
+  /// Where recovery starts reading the log: after the snapshot, or earlier for the 2D SLAM
+  /// and place recognition, which have no snapshot.
   int64_t replayFromId() const;
+  /// Whether a logged message of this kind (RobotMessage body field) at or below the
+  /// snapshot's id still has to be replayed (it feeds the 2D SLAM or place recognition).
+  bool replaysBelowSnapshot(int32_t kind) const;
   /// Starts the apply thread.
   void start();
   /// Applies what is queued, joins the thread and writes a final snapshot; later
@@ -86,6 +104,10 @@ class MapWorker {
   const Slam2dLayer& slam2d() const { return slam2d_; }
   TileIndex& tiles() { return tiles_; }
   size_t queueDepth() const;
+  /// Frames waiting for place recognition.
+  size_t loopQueueDepth() const;
+  /// Waits until every frame queued so far went through place recognition (tests, benchmarks).
+  void drainLoopClosures();
   int64_t appliedId() const;
 
  private:
@@ -98,8 +120,18 @@ class MapWorker {
   void run();
   void apply(int64_t log_id, const v1::RobotMessage& message, const std::string& robot_id, bool live);
   /// @param in_map3d  the 3D map, trajectory and robot poses hold this message already (snapshot)
-  void applyScan(const v1::RobotMessage& message, const std::string& robot_id, bool in_map3d, bool live);
+  void applyScan(int64_t log_id, const v1::RobotMessage& message, const std::string& robot_id, bool in_map3d,
+                 bool live);
+  void applyCloud(const v1::RobotMessage& message, const std::string& robot_id);
   void noteSlamInput(int64_t log_id);
+  /// Queues a camera image for place recognition, when camera recognition is on.
+  void feedImage(int64_t log_id, const v1::RobotMessage& message, const std::string& robot_id);
+  /// Queues the intensity panorama of a cloud with intensities, when that recognition is on.
+  void feedCloud(int64_t log_id, const v1::RobotMessage& message, const std::string& robot_id);
+  /// Queues a reflectivity patch around a 2D-laser robot every so much travel, when that recognition is on.
+  void feedPatch(int64_t log_id, const std::string& robot_id, int64_t stamp_ns, const slam2d::Pose2& base_pose);
+  void noteLoopInput(int64_t log_id);
+  void publishPose(const RobotPose& pose);
   void flushTrajectories();
   void writeSnapshot();
 
@@ -114,6 +146,11 @@ class MapWorker {
   const RobotSensors& sensors_;
   EstimateSink estimate_sink_;
   int64_t slam_first_input_id_;
+  int64_t loop_first_input_id_;
+  std::map<std::string, RobotPose> last_poses_;  ///< worker thread only: places of frames without their own pose
+  std::map<std::string, slam2d::Pose2> last_patch_;  ///< worker thread only: where each robot's last patch was taken
+  /// Declared after what its callbacks use; stopped in stop().
+  std::unique_ptr<LoopClosureFeed> loop_feed_;
   const int64_t restored_id_;  ///< log id of the snapshot the 3D map was restored from
 
   mutable std::mutex mutex_;

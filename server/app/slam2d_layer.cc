@@ -99,6 +99,11 @@ void Slam2dLayer::addOdometry(const std::string& robot_id, const v1::Odometry& o
   odometry_[robot_id] = planar(toIsometry(odometry.pose()));
 }
 
+cv::Mat Slam2dLayer::reflectivityPatch(const slam2d::Pose2& center, const loop::PatchOptions& options) const {
+  std::shared_lock lock(mutex_);
+  return loop::reflectivityPatch(slam_.grid(), center, options);
+}
+
 double Slam2dLayer::Source::resolutionM() const { return slam_.grid().resolution_m(); }
 
 Eigen::AlignedBox2i Slam2dLayer::Source::knownCells() const { return slam_.grid().knownCells(); }

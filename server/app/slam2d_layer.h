@@ -15,6 +15,7 @@
 #include "app/layer_tiles.h"
 #include "app/metrics.h"
 #include "app/robot_sensors.h"
+#include "loop/reflectivity_patch.h"
 #include "rmap/v1/robot_stream.pb.h"
 #include "slam2d/intensity_calibration.h"
 #include "slam2d/slam2d.h"
@@ -54,6 +55,9 @@ class Slam2dLayer {
   /// Changes whenever the grid changed (the SLAM's map version).
   uint64_t version() const { return version_.load(); }
   uint64_t scans() const { return scans_.load(); }
+
+  /// The reflectivity patch around a pose (place recognition of 2D-laser robots), under the shared lock.
+  cv::Mat reflectivityPatch(const slam2d::Pose2& center, const loop::PatchOptions& options) const;
 
   /// Runs fn(const Grid2dSource&) under the shared lock and returns its result.
   template <typename Fn>

@@ -1,0 +1,79 @@
+#pragma once
+/// @file loop_closure_feed.h
+/// Place recognition of one map on its own thread: frames (camera images,
+/// laser-intensity images) queued by the map worker in log order go through
+/// the recognizer of their source; each accepted match becomes a LoopClosure
+/// between the two frames' places.
+///
+/// The queue is bounded: a full queue holds the worker back (and with it the
+/// acks of later messages) for at most that many frames, and no frame is ever
+/// dropped, so a replay of the log finds the same closures.
+
+#include <condition_variable>
+#include <deque>
+#include <functional>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "app/loop_closures.h"
+#include "app/metrics.h"
+#include "app/place_recognizer.h"
+
+namespace rmap::app {
+
+class LoopClosureFeed {
+ public:
+  struct Frame {
+    FrameKind kind = FrameKind::kCamera;
+    LoopPlace place;
+    /// Makes the 8-bit grey image on the feed's thread (e.g. decodes a JPEG).
+    /// @throws std::invalid_argument when it cannot (the frame is skipped and counted)
+    std::function<cv::Mat()> gray;
+  };
+
+  /// @param factory     called once per kind of frame at construction
+  /// @param max_queued  frames waiting at most, >= 1
+  LoopClosureFeed(std::string map, const RecognizerFactory& factory, LoopClosureSink sink, Metrics& metrics,
+                  size_t max_queued);
+  /// stop().
+  ~LoopClosureFeed();
+  LoopClosureFeed(const LoopClosureFeed&) = delete;
+  LoopClosureFeed& operator=(const LoopClosureFeed&) = delete;
+
+  /// Whether frames of `kind` are recognised (its recognizer exists).
+  bool accepts(FrameKind kind) const { return recognizers_.count(kind) > 0; }
+  /// Queues a frame of an accepted kind, waiting while the queue is full.
+  void push(Frame frame);
+  /// Waits until every queued frame went through its recognizer.
+  void drain();
+  /// Processes what is queued and joins the thread; later calls do nothing.
+  void stop();
+  size_t queued() const;
+
+ private:
+  struct Recognizer {
+    std::unique_ptr<PlaceRecognizer> recognizer;
+    std::vector<LoopPlace> places;  ///< one per frame the recognizer took, in its frame order
+  };
+  void run();
+  void process(Frame& frame);
+
+  std::string map_;
+  std::map<FrameKind, Recognizer> recognizers_;
+  LoopClosureSink sink_;
+  Metrics& metrics_;
+  size_t max_queued_;
+
+  mutable std::mutex mutex_;
+  std::condition_variable changed_;
+  std::deque<Frame> queue_;
+  bool busy_ = false;  ///< a frame taken off the queue is being processed
+  bool stopping_ = false;
+  std::thread thread_;
+};
+
+}  // namespace rmap::app

@@ -1,0 +1,144 @@
+#include "app/loop_closure_feed.h"
+
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <future>
+#include <mutex>
+#include <opencv2/core.hpp>
+#include <stdexcept>
+#include <thread>
+
+namespace rmap::app {
+namespace {
+
+/// Test double of a place recognizer: a frame matches the first earlier frame of the same
+/// mean grey, two or more frames back; its score is the frame's mean grey / 255.
+class SameGreyRecognizer : public PlaceRecognizer {
+ public:
+  explicit SameGreyRecognizer(std::shared_future<void> gate = {}) : gate_(std::move(gate)) {}
+  std::optional<Match> addFrame(const cv::Mat& gray) override {
+    if (gate_.valid()) gate_.wait();
+    if (gray.type() != CV_8UC1) throw std::invalid_argument("not 8-bit grey");
+    const double mean = cv::mean(gray)[0];
+    means_.push_back(mean);
+    for (size_t i = 0; i + 2 < means_.size(); ++i) {
+      if (means_[i] == mean) return Match{static_cast<int64_t>(i), mean / 255.0};
+    }
+    return std::nullopt;
+  }
+
+ private:
+  std::shared_future<void> gate_;
+  std::vector<double> means_;
+};
+
+LoopClosureFeed::Frame frame(FrameKind kind, const std::string& robot, int64_t stamp_ns, uint8_t grey) {
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  pose.translation().x() = static_cast<double>(stamp_ns);
+  return {kind, {robot, stamp_ns, pose}, [grey] { return cv::Mat(32, 32, CV_8UC1, cv::Scalar(grey)); }};
+}
+
+struct Collected {
+  std::mutex mutex;
+  std::vector<LoopClosure> closures;
+  LoopClosureSink sink() {
+    return [this](const LoopClosure& c) {
+      std::lock_guard lock(mutex);
+      closures.push_back(c);
+    };
+  }
+};
+
+TEST(LoopClosureFeed, AcceptedMatchesBecomeClosuresBetweenTheFramesPlaces) {
+  Metrics metrics;
+  Collected out;
+  LoopClosureFeed feed(
+      "lab", [](FrameKind kind) -> std::unique_ptr<PlaceRecognizer> {
+        if (kind == FrameKind::kIntensityPanorama) return nullptr;  // that kind is off
+        return std::make_unique<SameGreyRecognizer>();
+      },
+      out.sink(), metrics, 4);
+  EXPECT_TRUE(feed.accepts(FrameKind::kCamera));
+  EXPECT_TRUE(feed.accepts(FrameKind::kReflectivityPatch));
+  EXPECT_FALSE(feed.accepts(FrameKind::kIntensityPanorama));
+  EXPECT_THROW(feed.push(frame(FrameKind::kIntensityPanorama, "r1", 1, 10)), std::invalid_argument);
+
+  feed.push(frame(FrameKind::kCamera, "r1", 1, 100));
+  feed.push(frame(FrameKind::kReflectivityPatch, "r2", 2, 100));  // another recognizer: no match across kinds
+  feed.push(frame(FrameKind::kCamera, "r1", 3, 50));
+  // A frame that does not decode is skipped and takes no frame index.
+  feed.push({FrameKind::kCamera, {"r1", 4, std::nullopt}, []() -> cv::Mat { throw std::invalid_argument("bad"); }});
+  feed.push(frame(FrameKind::kCamera, "r2", 5, 100));  // camera frame 2 matches frame 0
+  feed.drain();
+
+  ASSERT_EQ(out.closures.size(), 1u);
+  const LoopClosure& c = out.closures[0];
+  EXPECT_EQ(c.map, "lab");
+  EXPECT_EQ(c.source, LoopSource::kCamera);
+  EXPECT_EQ(c.query.robot_id, "r2");
+  EXPECT_EQ(c.query.stamp_ns, 5);
+  ASSERT_TRUE(c.query.pose);
+  EXPECT_EQ(c.query.pose->translation().x(), 5.0);
+  EXPECT_EQ(c.match.robot_id, "r1");
+  EXPECT_EQ(c.match.stamp_ns, 1);
+  EXPECT_NEAR(c.score, 100.0 / 255.0, 1e-12);
+  EXPECT_EQ(metrics.loop_frames.load(), 4u);
+  EXPECT_EQ(metrics.loop_frames_refused.load(), 1u);
+}
+
+TEST(LoopClosureFeed, PatchClosuresReportLaserIntensity) {
+  Metrics metrics;
+  Collected out;
+  LoopClosureFeed feed(
+      "lab", [](FrameKind) { return std::make_unique<SameGreyRecognizer>(); }, out.sink(), metrics, 4);
+  for (int64_t i = 0; i < 3; ++i) feed.push(frame(FrameKind::kReflectivityPatch, "r1", i, i == 2 ? 7 : 7 + i));
+  feed.drain();
+  ASSERT_EQ(out.closures.size(), 1u);
+  EXPECT_EQ(out.closures[0].source, LoopSource::kLaserIntensity);
+}
+
+TEST(LoopClosureFeed, AFullQueueHoldsThePusherBackAndDropsNothing) {
+  Metrics metrics;
+  Collected out;
+  std::promise<void> open;
+  std::shared_future<void> gate = open.get_future().share();
+  LoopClosureFeed feed(
+      "lab", [&](FrameKind) { return std::make_unique<SameGreyRecognizer>(gate); }, out.sink(), metrics, 2);
+  // One frame in the (blocked) recognizer, two queued: the fourth push waits.
+  std::atomic<int> pushed{0};
+  std::thread pusher([&] {
+    for (int64_t i = 0; i < 4; ++i) {
+      feed.push(frame(FrameKind::kCamera, "r1", i, i == 3 ? 0 : static_cast<uint8_t>(10 + i)));
+      ++pushed;
+    }
+  });
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  EXPECT_EQ(pushed.load(), 3);
+  EXPECT_EQ(feed.queued(), 2u);
+  open.set_value();
+  pusher.join();
+  feed.drain();
+  EXPECT_EQ(pushed.load(), 4);
+  EXPECT_EQ(metrics.loop_frames.load(), 4u);
+}
+
+TEST(LoopClosureFeed, StopProcessesWhatIsQueued) {
+  Metrics metrics;
+  Collected out;
+  {
+    LoopClosureFeed feed(
+        "lab", [](FrameKind) { return std::make_unique<SameGreyRecognizer>(); }, out.sink(), metrics, 8);
+    for (int64_t i = 0; i < 4; ++i) feed.push(frame(FrameKind::kCamera, "r1", i, i == 3 ? 20 : 20 + i));
+  }
+  EXPECT_EQ(metrics.loop_frames.load(), 4u);
+  EXPECT_EQ(out.closures.size(), 1u);
+}
+
+TEST(LoopClosureFeed, QueueBoundMustBePositive) {
+  Metrics metrics;
+  EXPECT_THROW(LoopClosureFeed("lab", nullptr, nullptr, metrics, 0), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace rmap::app
