@@ -9,29 +9,12 @@
 #include <stdexcept>
 #include <thread>
 
+#include "same_grey_recognizer.h"
+
 namespace rmap::app {
 namespace {
 
-/// Test double of a place recognizer: a frame matches the first earlier frame of the same
-/// mean grey, two or more frames back; its score is the frame's mean grey / 255.
-class SameGreyRecognizer : public PlaceRecognizer {
- public:
-  explicit SameGreyRecognizer(std::shared_future<void> gate = {}) : gate_(std::move(gate)) {}
-  std::optional<Match> addFrame(const cv::Mat& gray) override {
-    if (gate_.valid()) gate_.wait();
-    if (gray.type() != CV_8UC1) throw std::invalid_argument("not 8-bit grey");
-    const double mean = cv::mean(gray)[0];
-    means_.push_back(mean);
-    for (size_t i = 0; i + 2 < means_.size(); ++i) {
-      if (means_[i] == mean) return Match{static_cast<int64_t>(i), mean / 255.0};
-    }
-    return std::nullopt;
-  }
-
- private:
-  std::shared_future<void> gate_;
-  std::vector<double> means_;
-};
+using testing::SameGreyRecognizer;
 
 LoopClosureFeed::Frame frame(FrameKind kind, const std::string& robot, int64_t stamp_ns, uint8_t grey) {
   Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
