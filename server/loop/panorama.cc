@@ -1,6 +1,7 @@
 #include "loop/panorama.h"
 
 #include <algorithm>
+#include <cstdint>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -129,11 +130,18 @@ std::vector<float> estimateRingElevations(std::span<const Eigen::Vector3f> point
 
 cv::Mat projectPanorama(std::span<const Eigen::Vector3f> points_sensor, std::span<const float> intensities,
                         const PanoramaOptions& options) {
+  cv::Mat unused;
+  return projectPanorama(points_sensor, intensities, options, unused);
+}
+
+cv::Mat projectPanorama(std::span<const Eigen::Vector3f> points_sensor, std::span<const float> intensities,
+                        const PanoramaOptions& options, cv::Mat& point_index) {
   options.validate();
   if (points_sensor.size() != intensities.size()) {
     throw std::invalid_argument("projectPanorama: " + std::to_string(points_sensor.size()) + " points but " +
                                 std::to_string(intensities.size()) + " intensities");
   }
+  if (points_sensor.size() > static_cast<size_t>(INT32_MAX)) throw std::invalid_argument("projectPanorama: too many points");
   const int w = options.width_px, h = options.height_px;
   const bool by_ring = options.projection == PanoramaProjection::kRingByColumn;
   std::vector<float> rings;
@@ -152,6 +160,7 @@ cv::Mat projectPanorama(std::span<const Eigen::Vector3f> points_sensor, std::spa
   // z-buffer: closest point per pixel, its intensity.
   std::vector<float> depth(static_cast<size_t>(w) * h, std::numeric_limits<float>::infinity());
   std::vector<float> value(depth.size(), 0.0f);
+  std::vector<int32_t> source(depth.size(), -1);
   const double fov = options.fov_up_rad - options.fov_down_rad;
   for (size_t i = 0; i < points_sensor.size(); ++i) {
     const Eigen::Vector3f& p = points_sensor[i];
@@ -173,6 +182,7 @@ cv::Mat projectPanorama(std::span<const Eigen::Vector3f> points_sensor, std::spa
     if (r < depth[k]) {
       depth[k] = r;
       value[k] = std::max(0.0f, intensity);
+      source[k] = static_cast<int32_t>(i);
     }
   }
 
@@ -182,6 +192,8 @@ cv::Mat projectPanorama(std::span<const Eigen::Vector3f> points_sensor, std::spa
   }
   cv::Mat grey(h, w, CV_8UC1, cv::Scalar(0));
   cv::Mat filled(h, w, CV_8UC1, cv::Scalar(0));
+  point_index = cv::Mat(h, w, CV_32SC1);
+  std::copy(source.begin(), source.end(), point_index.begin<int32_t>());
   if (kept.empty()) return grey;
   auto percentile = [&](double q) {
     const size_t n = static_cast<size_t>(std::lround(q * static_cast<double>(kept.size() - 1)));

@@ -63,6 +63,12 @@ struct PanoramaOptions {
 cv::Mat projectPanorama(std::span<const Eigen::Vector3f> points_sensor, std::span<const float> intensities,
                         const PanoramaOptions& options);
 
+/// Same, and the index (into points_sensor) of the point each pixel shows in
+/// `point_index` (CV_32SC1, same size; −1 for pixels without a point of their
+/// own, hole-filled or empty), to lift image features back to 3D.
+cv::Mat projectPanorama(std::span<const Eigen::Vector3f> points_sensor, std::span<const float> intensities,
+                        const PanoramaOptions& options, cv::Mat& point_index);
+
 /// Elevations (rad, ascending) of the laser rings of a cloud (sensor frame):
 /// the sorted elevations split at the ring_count − 1 widest gaps, or, with
 /// ring_count 0, at every gap wider than gap_rad; each ring is the median of its

@@ -70,7 +70,7 @@ TEST(Panorama, LeftOfForwardIsLeftInTheImage) {
 }
 
 TEST(Panorama, ClosestPointWinsAPixel) {
-  std::vector<Eigen::Vector3f> points{{10, 0, 0}, {3, 0, 0}, {6, 0, 0}, {4, 4, 0}};
+  std::vector<Eigen::Vector3f> points{{10, 0, 0}, {3, 0, 0}, {6, 0, 0}, {4, 3, 0}};
   std::vector<float> intensity{0.0f, 50.0f, 100.0f, 100.0f};
   PanoramaOptions o;
   o.width_px = 64;
@@ -78,8 +78,13 @@ TEST(Panorama, ClosestPointWinsAPixel) {
   o.fill_iterations = 0;
   o.low_percentile = 0.0;
   o.high_percentile = 1.0;
-  const cv::Mat img = projectPanorama(points, intensity, o);
+  cv::Mat index;
+  const cv::Mat img = projectPanorama(points, intensity, o, index);
   EXPECT_EQ(img.at<uint8_t>(16, 32), 1);  // the 3 m point (50, the lowest kept) hides the others
+  ASSERT_EQ(index.type(), CV_32SC1);
+  EXPECT_EQ(index.at<int32_t>(16, 32), 1);
+  EXPECT_EQ(index.at<int32_t>(16, 25), 3);  // (4, 3): 36.9° left
+  EXPECT_EQ(index.at<int32_t>(0, 0), -1);
 }
 
 TEST(Panorama, RingByColumnGivesEachRingAnEqualBand) {
