@@ -4,6 +4,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "app/bow_recognizer.h"
 #include "app/robot_session.h"
 #include "map3d/map_file.h"
 
@@ -79,11 +80,11 @@ std::vector<std::string> readMapParams(const store::MapRecord& record, map3d::Oc
 
 const char* MappingService::version() { return RMAP_VERSION; }
 
-MappingService::MappingService(Config config, RecognizerFactory recognizers)
+MappingService::MappingService(Config config, std::optional<RecognizerFactory> recognizers)
     : config_(std::move(config)),
       viewers_(metrics_, config_.limits.viewer_send_queue_bytes),
       calibrations_(loadCalibrations(config_.slam2d)),
-      recognizers_(std::move(recognizers)) {
+      recognizers_(recognizers ? std::move(*recognizers) : bowRecognizers(config_.loop_closure)) {
   store_ = store::Store::open(config_.data_dir);
   loadSlam2dEvents();
   // Event ids are never reused, so the id of this start's event exceeds every earlier epoch.

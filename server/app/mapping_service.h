@@ -38,10 +38,10 @@ struct RobotStatus {
 class MappingService {
  public:
   /// Opens the store under config.data_dir and recovers the maps.
-  /// @param recognizers  place recognition per map and kind of frame (none, or nullptr
-  ///                     from the factory: that kind is off)
+  /// @param recognizers  place recognition per map and kind of frame (nullptr from the
+  ///                     factory: that kind is off); by default bowRecognizers(config.loop_closure)
   /// @throws store::StoreError, std::runtime_error with a clear message
-  explicit MappingService(Config config, RecognizerFactory recognizers = {});
+  explicit MappingService(Config config, std::optional<RecognizerFactory> recognizers = std::nullopt);
   /// Stops the tick thread, drains the committer and the workers (final snapshots).
   ~MappingService();
   MappingService(const MappingService&) = delete;

@@ -198,7 +198,7 @@ TEST(MappingService, CameraLoopClosuresAreStoredOnceAcrossReplaysOfTheLog) {
   }
   {
     // Without place recognition nothing below the snapshot is replayed for it.
-    MappingService service(testing::configIn(dir.path()));
+    MappingService service(testing::configIn(dir.path()), RecognizerFactory{});
     EXPECT_EQ(service.metrics().messages_recovered.load(), 0u);
     EXPECT_EQ(stored(service.store()).size(), 1u);
   }
