@@ -85,6 +85,16 @@ int main(int argc, char** argv) {
   d->add_option("--coarse-iterations", slam2d.slam.matcher.coarse_iterations, "Gauss-Newton iterations per coarse level");
   d->add_option("--fine-iterations", slam2d.slam.matcher.fine_iterations, "Gauss-Newton iterations on the finest level");
   d->add_option("--relock-margin", slam2d.slam.relock_residual_margin, "match residual above the recent mean that triggers a search (<= 0: off)");
+  std::string loop_closure = "off";  // off by default: the front-end figures stay comparable
+  d->add_option("--loop-closure", loop_closure, "loop closure with a pose graph (scored: the corrected trajectory)")
+      ->check(CLI::IsMember({"on", "off"}));
+  d->add_option("--map-image", slam2d.map_image_out, "write the final occupancy map as an 8-bit PGM to this file");
+  d->add_option("--map-image-max-px", slam2d.map_image_max_px, "scale the map image down to this longer side")
+      ->check(CLI::PositiveNumber);
+  d->add_option("--closure-reference", slam2d.closure_reference_path,
+                "corrected CARMEN log of the same run whose poses judge the closures (scans found by their ranges)");
+  d->add_option("--submap-keyframes", slam2d.slam.loop_closure.submap_keyframes, "keyframes per loop-closure submap");
+  d->add_option("--loop-min-score", slam2d.slam.loop_closure.min_score, "correlative score a loop closure needs");
   rmap::bench::CalibrationEvalOptions calib;
   calib.lidar_pair_dir = std::string(RMAP_SHARED_DATA_DIR) + "/lidar-intensity/small-gicp-pair";
   CLI::App* c = app.add_subcommand("calib", "2D laser intensity calibration on both simulated scanners, real lidar check");
@@ -97,7 +107,10 @@ int main(int argc, char** argv) {
   try {
     if (m->parsed()) return rmap::bench::runMap3dBench(map3d);
     if (s->parsed()) return rmap::bench::runServerBench(server);
-    if (d->parsed()) return rmap::bench::runSlam2dBench(slam2d);
+    if (d->parsed()) {
+      slam2d.slam.loop_closure.enabled = loop_closure == "on";
+      return rmap::bench::runSlam2dBench(slam2d);
+    }
     if (c->parsed()) return rmap::bench::runCalibrationBench(calib);
   } catch (const std::exception& e) {
     std::cerr << "rmap-bench: " << e.what() << std::endl;

@@ -12,6 +12,11 @@
 #include <numbers>
 #include <stdexcept>
 
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <unordered_map>
+
 #include "common/machine.h"
 #include "slam2d/reflectivity_metrics.h"
 #include "slam2d/trajectory_metrics.h"
@@ -57,6 +62,17 @@ SlamRun runSlam(slam2d::Slam2d& slam, const std::vector<Slam2dInput>& inputs) {
   }
   run.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   run.cpu_s = processCpuSeconds() - cpu0;
+  if (slam.options().loop_closure.enabled) {
+    // Scored: the final corrected trajectory (every scan on its corrected keyframe).
+    const std::vector<slam2d::StampedPose2> corrected = slam.trajectory("robot");
+    size_t k = 0;
+    for (size_t i = 0; i < inputs.size() && k < corrected.size(); ++i) {
+      if (corrected[k].stamp_ns != inputs[i].scan.stamp_ns) continue;  // a rejected scan has no pose of its own
+      run.robot_poses[i] = corrected[k].pose;
+      run.laser_poses[i] = corrected[k].pose * inputs[i].scan.sensor_mount;
+      ++k;
+    }
+  }
   const Eigen::AlignedBox2i known = slam.grid().knownCells();
   for (const Pose2& p : run.robot_poses) {
     if (!p.isFinite()) {
@@ -122,6 +138,48 @@ Paired paired(const std::vector<Slam2dInput>& inputs, const std::vector<Pose2>& 
 
 double orNan(const std::optional<double>& v) { return v.value_or(std::numeric_limits<double>::quiet_NaN()); }
 
+/// The occupancy grid as an 8-bit image (ROS map_server shades: free 254, occupied 0, unknown 205),
+/// north up, scaled down by area averaging so its longer side is at most max_px.
+void writeMapImage(const std::string& path, const slam2d::GridMap2d& grid, int max_px) {
+  const Eigen::AlignedBox2i box = grid.knownCells();
+  if (box.isEmpty()) throw std::runtime_error("no map to write to " + path);
+  const Eigen::Vector2i size = box.sizes() + Eigen::Vector2i::Ones();
+  cv::Mat image(size.y(), size.x(), CV_8UC1);
+  for (int y = 0; y < size.y(); ++y) {
+    for (int x = 0; x < size.x(); ++x) {
+      const float p = grid.probability(box.min() + Eigen::Vector2i(x, y));
+      image.at<uint8_t>(size.y() - 1 - y, x) =
+          std::isfinite(p) ? static_cast<uint8_t>(std::lround(254.0 * (1.0 - std::clamp(p, 0.0f, 1.0f)))) : 205;
+    }
+  }
+  const double scale = std::min(1.0, double(max_px) / double(std::max(size.x(), size.y())));
+  if (scale < 1.0) cv::resize(image, image, cv::Size(), scale, scale, cv::INTER_AREA);
+  if (!cv::imwrite(path, image)) throw std::runtime_error("cannot write " + path);
+}
+
+/// Judges accepted loop closures against reference laser poses: a scan
+/// without one borrows the nearest scan's that has one, carried over by the
+/// estimated motion between the two (a few scans: centimetres).
+struct ClosureJudge {
+  std::vector<std::optional<Pose2>> reference;  ///< per input
+  std::unordered_map<int64_t, size_t> index_of_stamp;
+  static constexpr size_t kMaxBorrow = 30;      ///< scans searched each way for a reference pose
+  static constexpr double kMaxError_m = 0.3, kMaxError_rad = 5.0 / kDegPerRad;
+
+  std::optional<Pose2> referenceOf(int64_t stamp, const std::vector<Pose2>& estimate) const {
+    const auto it = index_of_stamp.find(stamp);
+    if (it == index_of_stamp.end()) return std::nullopt;
+    const size_t i = it->second;
+    for (size_t d = 0; d <= kMaxBorrow; ++d) {
+      for (const size_t j : {i - d, i + d}) {
+        if (j >= reference.size() || !reference[j]) continue;  // i − d wraps below 0 to a huge index
+        return *reference[j] * between(estimate[j], estimate[i]);
+      }
+    }
+    return std::nullopt;
+  }
+};
+
 }  // namespace
 
 int runSlam2dBench(const Slam2dBenchOptions& options) {
@@ -147,6 +205,7 @@ int runSlam2dBench(const Slam2dBenchOptions& options) {
 
   slam2d::Slam2d slam(options.slam);
   const SlamRun run = runSlam(slam, data.inputs);
+  const std::vector<slam2d::LoopClosure2d> closures = slam.takeLoopClosures();
 
   const RelationErrors rel = relationErrors(stamped(data.inputs, run.laser_poses), data.relations);
   const Paired scored = paired(data.inputs, run.laser_poses, data.reference);
@@ -191,6 +250,77 @@ int runSlam2dBench(const Slam2dBenchOptions& options) {
             {"slam_options", slamOptionsJson(options.slam)},
             {"machine", machineJson()}};
   if (!run.first_rejection.empty()) r["first_rejection"] = run.first_rejection;
+  if (const slam2d::LoopClosureStats* lc = slam.loopClosureStats()) {
+    // Judge: a corrected log of the same run (scans found by their ranges), else the reference poses.
+    ClosureJudge judge;
+    for (size_t i = 0; i < data.inputs.size(); ++i) judge.index_of_stamp.emplace(data.inputs[i].scan.stamp_ns, i);
+    std::string judged_by = data.reference_kind;
+    if (!options.closure_reference_path.empty()) {
+      Slam2dSourceOptions ref_source;
+      ref_source.stamps_path = options.source;
+      ref_source.odometry = OdometrySource::kNone;
+      const Slam2dDataset ref = loadSlam2dDataset(options.closure_reference_path, ref_source);
+      judge.reference.assign(data.inputs.size(), std::nullopt);
+      for (size_t k = 0; k < ref.inputs.size(); ++k) {
+        const auto it = judge.index_of_stamp.find(ref.inputs[k].scan.stamp_ns);
+        if (it != judge.index_of_stamp.end() && ref.reference[k]) judge.reference[it->second] = ref.reference[k];
+      }
+      judged_by = "poses of " + options.closure_reference_path + " (" + std::to_string(ref.stamps_replaced) +
+                  " scans found)";
+    } else if (data.reference_kind.find("raw odometry") == std::string::npos) {
+      judge.reference = data.reference;
+    } else {
+      judged_by = "none (raw odometry is no reference)";
+    }
+    size_t judged = 0, false_closures = 0, cross = 0;
+    double worst_m = 0.0;
+    json list = json::array();
+    for (const slam2d::LoopClosure2d& c : closures) {
+      cross += c.query_trajectory != c.match_trajectory;
+      const auto mount_it = judge.index_of_stamp.find(c.query_stamp_ns);
+      const Pose2 mount = mount_it == judge.index_of_stamp.end() ? Pose2{} : data.inputs[mount_it->second].scan.sensor_mount;
+      const Pose2 measured = mount.inverse() * c.relative * mount;  // laser to laser
+      json item = {{"query_stamp_ns", c.query_stamp_ns}, {"match_stamp_ns", c.match_stamp_ns}, {"score", c.score},
+                   {"relative", {c.relative.x_m, c.relative.y_m, c.relative.theta_rad}}};
+      const std::optional<Pose2> rq = judge.referenceOf(c.query_stamp_ns, run.laser_poses);
+      const std::optional<Pose2> rm = judge.referenceOf(c.match_stamp_ns, run.laser_poses);
+      if (rq && rm) {
+        const Pose2 e = between(between(*rm, *rq), measured);
+        const bool wrong = e.translation().norm() > ClosureJudge::kMaxError_m ||
+                           std::abs(e.theta_rad) > ClosureJudge::kMaxError_rad;
+        ++judged;
+        false_closures += wrong;
+        worst_m = std::max(worst_m, e.translation().norm());
+        item["error_m"] = e.translation().norm();
+        item["error_deg"] = std::abs(e.theta_rad) * kDegPerRad;
+        item["false"] = wrong;
+      }
+      list.push_back(item);
+    }
+    r["loop_closure"] = {{"closures", closures.size()},
+                         {"cross_trajectory_closures", cross},
+                         {"closures_judged", judged},
+                         {"false_closures", judged > 0 ? json(false_closures) : json(nullptr)},
+                         {"worst_closure_error_m", judged > 0 ? json(worst_m) : json(nullptr)},
+                         {"judged_by", judged_by},
+                         {"keyframes", slam.keyframeCount()},
+                         {"searches", lc->searches},
+                         {"matches", lc->matches},
+                         {"accepted", lc->accepted},
+                         {"unsupported", lc->unsupported},
+                         {"rejected_after_optimization", lc->rejected_after_optimization},
+                         {"optimizations", lc->optimizations},
+                         {"graph_versions", slam.graphVersion()},
+                         {"optimization_s", lc->optimization_s},
+                         {"search_s", lc->search_s},
+                         {"submaps_built", lc->submaps_built},
+                         {"list", list}};
+    std::printf("loop closure: %zu closures (%zu judged by %s, %zu false, worst %.3f m), %llu searches, %llu "
+                "optimisations %.2f s, search %.2f s\n",
+                closures.size(), judged, judged_by.c_str(), false_closures, worst_m,
+                static_cast<unsigned long long>(lc->searches), static_cast<unsigned long long>(lc->optimizations),
+                lc->optimization_s, lc->search_s);
+  }
   // Baseline: the same relations scored on the reference trajectory (raw
   // odometry in a raw log, the correcting SLAM's poses in a corrected log).
   const RelationErrors ref_rel = relationErrors(scored.stamped_reference, data.relations);
@@ -256,6 +386,7 @@ int runSlam2dBench(const Slam2dBenchOptions& options) {
                 r["reflectivity_spread_calibrated"].get<double>());
   }
   if (!options.poses_out.empty()) writePoses(options.poses_out, data.inputs, run.laser_poses);
+  if (!options.map_image_out.empty()) writeMapImage(options.map_image_out, slam.grid(), options.map_image_max_px);
   if (!options.json_out.empty()) {
     std::ofstream out(options.json_out);
     if (!out) throw std::runtime_error("cannot write " + options.json_out);

@@ -18,6 +18,13 @@ struct Slam2dBenchOptions {
   std::string odometry = "auto";  ///< auto | logged | odom-increments | none (see OdometrySource)
   std::string json_out;        ///< empty: no file
   std::string poses_out;       ///< empty: no file; else one line "stamp_s x y theta" per scan (estimated laser pose)
+  std::string map_image_out;   ///< empty: no file; else the final occupancy grid, 8-bit (format by extension: .png, .pgm)
+  int map_image_max_px = 100000;  ///< the image is scaled down so its longer side is at most this
+  /// A corrected log of the same run (e.g. intel-corrected for raw intel):
+  /// its poses, found by their scans' ranges, judge each accepted closure
+  /// (a closure is false when its relative pose is off by > 0.3 m or 5°).
+  /// Empty: closures are judged against the reference poses where known.
+  std::string closure_reference_path;
   size_t max_scans = 0;        ///< 0: all; else only the first ones (quick runs)
   double rpe_distance_m = 1.0;
   Slam2dSimOptions sim;

@@ -66,11 +66,20 @@ void Slam2dOptions::validate() const {
   require(matcher.damping >= 0.0 && matcher.max_step_cells > 0.0 && matcher.max_step_rad > 0.0,
           "matcher damping ≥ 0 and step bounds > 0");
   incidence.validate();  // else a bad option would only throw at the first scan with intensities
+  loop_closure.validate();
 }
 
 Slam2d::Slam2d(Slam2dOptions options)
     : options_((options.validate(), options)), map_(options_.resolution_m, options_.levels) {
   options_.matcher.reflectivity_weight = options_.reflectivity_weight;
+  if (options_.loop_closure.enabled) {
+    LoopClosureOptions loop = options_.loop_closure;
+    loop.submap.resolution_m = options_.resolution_m;
+    loop.submap.occupancy = options_.occupancy;
+    loop.submap.refinement = options_.matcher;
+    loop.submap.refinement.reflectivity_weight = 0.0;  // submaps carry no reflectivity
+    loop_closer_ = std::make_unique<LoopCloser>(loop);
+  }
 }
 
 void Slam2d::setCalibration(const std::string& model, IntensityCalibration calibration) {
@@ -218,16 +227,31 @@ Pose2 Slam2d::addScan(const std::string& trajectory, const LaserScan& scan, cons
   const Pose2 moved = between(track.last_update_pose, estimate);
   const bool update = is_new || map_.empty() || moved.translation().norm() >= options_.map_update_distance_m ||
                       std::abs(moved.theta_rad) >= options_.map_update_angle_rad;
+  if (is_new) {
+    track.index = names_.size();
+    names_.push_back(trajectory);
+    scans_.emplace_back();
+  }
+  bool keyframe_added = false;
   if (update && !beams.empty()) {
-    const Pose2 sensor = estimate * scan.sensor_mount;
-    std::vector<Ray> rays;
-    rays.reserve(beams.size());
-    for (const Beam& b : beams) rays.push_back({estimate * b.end_m, true});
-    map_.insert(sensor.translation(), rays, options_.occupancy, range_max);
-    if (calibration) {
-      for (size_t i = 0; i < beams.size(); ++i)
-        if (std::isfinite(beams[i].reflectivity)) map_.addReflectivity(rays[i].end_m, beams[i].reflectivity);
-    } else if (sampling && use_intensity) {
+    Keyframe kf;
+    kf.trajectory = track.index;
+    kf.stamp_ns = scan.stamp_ns;
+    kf.pose = estimate;
+    kf.sensor_mount = scan.sensor_mount;
+    kf.range_max_m = range_max;
+    kf.ends_robot.reserve(beams.size());
+    for (const Beam& b : beams) kf.ends_robot.push_back(b.end_m.cast<float>());
+    if (use_intensity) {
+      kf.model = scan.model;
+      for (const Beam& b : beams) {
+        kf.range_m.push_back(b.range_m);
+        kf.intensity.push_back(b.intensity);
+        kf.cos_incidence.push_back(b.cos_incidence);
+      }
+    }
+    const std::vector<Ray> rays = insertKeyframe(map_, kf, estimate, calibration, options_.occupancy);
+    if (!calibration && sampling && use_intensity) {
       ScannerModel& model = models_[scan.model];
       if (!model.sampler) model.sampler.emplace(options_.calibration_sample);
       for (size_t i = 0; i < beams.size(); ++i)
@@ -237,13 +261,80 @@ Pose2 Slam2d::addScan(const std::string& trajectory, const LaserScan& scan, cons
     }
     track.last_update_pose = estimate;
     ++version_;
+    if (loop_closer_) {
+      kf.match_points.reserve(points.size());
+      for (const MatchPoint& p : points) kf.match_points.push_back(p.p_m);
+    } else {
+      // Without loop closure a keyframe only anchors its scans' poses.
+      kf.ends_robot = {};
+      kf.range_m = kf.intensity = kf.cos_incidence = {};
+    }
+    track.keyframe = keyframes_.size();
+    keyframes_.push_back(std::move(kf));
+    keyframe_added = true;
   }
   track.last_increment = is_new ? Pose2{} : between(track.pose, estimate);
   track.pose = estimate;
   // A scan without odometry breaks the chain: the next step cannot be measured from older odometry.
   track.odometry = odometry;
+  scans_[track.index].push_back({scan.stamp_ns, track.keyframe,
+                                 track.keyframe ? between(keyframes_[*track.keyframe].pose, estimate) : estimate});
   trajectories_[trajectory] = track;
+
+  if (keyframe_added && loop_closer_) {
+    // Each trajectory's pose and last update pose ride on its newest keyframe.
+    std::vector<std::pair<Pose2, Pose2>> relative(names_.size());
+    for (const auto& [name, t] : trajectories_) {
+      if (!t.keyframe) continue;
+      const Pose2& k = keyframes_[*t.keyframe].pose;
+      relative[t.index] = {between(k, t.pose), between(k, t.last_update_pose)};
+    }
+    if (loop_closer_->addKeyframe(keyframes_)) applyCorrection(relative);
+    return trajectories_[trajectory].pose;
+  }
   return estimate;
+}
+
+void Slam2d::applyCorrection(const std::vector<std::pair<Pose2, Pose2>>& relative_to_keyframe) {
+  for (auto& [name, t] : trajectories_) {
+    if (!t.keyframe) continue;
+    const Pose2& k = keyframes_[*t.keyframe].pose;
+    t.pose = k * relative_to_keyframe[t.index].first;
+    t.last_update_pose = k * relative_to_keyframe[t.index].second;
+  }
+  GridMap2d map(options_.resolution_m, options_.levels);
+  for (const Keyframe& kf : keyframes_) {
+    const auto model = kf.model.empty() ? models_.end() : models_.find(kf.model);
+    const IntensityCalibration* calibration =
+        model != models_.end() && model->second.calibration ? &*model->second.calibration : nullptr;
+    insertKeyframe(map, kf, kf.pose, calibration, options_.occupancy);
+  }
+  map_ = std::move(map);
+  ++version_;
+  ++graph_version_;
+}
+
+std::vector<LoopClosure2d> Slam2d::takeLoopClosures() {
+  std::vector<LoopClosure2d> out;
+  if (!loop_closer_) return out;
+  for (const LoopCloser::Closure& c : loop_closer_->takeClosures()) {
+    const Keyframe& query = keyframes_[c.query];
+    const Keyframe& match = keyframes_[c.match];
+    out.push_back({names_[query.trajectory], query.stamp_ns, query.pose, names_[match.trajectory], match.stamp_ns,
+                   match.pose, c.score, c.relative});
+  }
+  return out;
+}
+
+std::vector<StampedPose2> Slam2d::trajectory(const std::string& trajectory) const {
+  std::vector<StampedPose2> out;
+  const auto it = trajectories_.find(trajectory);
+  if (it == trajectories_.end()) return out;
+  const std::vector<ScanRecord>& scans = scans_[it->second.index];
+  out.reserve(scans.size());
+  for (const ScanRecord& s : scans)
+    out.push_back({s.stamp_ns, s.keyframe ? keyframes_[*s.keyframe].pose * s.relative : s.relative});
+  return out;
 }
 
 }  // namespace rmap::slam2d

@@ -25,6 +25,7 @@
 /// ρ = 0.5, see self_calibration.h).
 
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <string>
 #include <unordered_map>
@@ -34,7 +35,9 @@
 #include "slam2d/grid_map.h"
 #include "slam2d/incidence.h"
 #include "slam2d/intensity_calibration.h"
+#include "slam2d/keyframe.h"
 #include "slam2d/laser_scan.h"
+#include "slam2d/loop_closure.h"
 #include "slam2d/pose2.h"
 #include "slam2d/scan_matcher.h"
 #include "slam2d/self_calibration.h"
@@ -110,9 +113,18 @@ struct Slam2dOptions {
   bool self_calibration = true;
   CalibrationSamplerOptions calibration_sample;
   SelfCalibrationOptions self_calibration_fit;
+  /// Loop closure with a pose graph (see loop_closure.h); on by default.
+  /// Its submaps take resolution_m, occupancy and matcher from here.
+  LoopClosureOptions loop_closure;
 
   /// @throws std::invalid_argument naming the first bad option
   void validate() const;
+};
+
+/// A scan's robot pose at its stamp.
+struct StampedPose2 {
+  int64_t stamp_ns = 0;
+  Pose2 pose;
 };
 
 class Slam2d {
@@ -137,9 +149,21 @@ class Slam2d {
   std::optional<Pose2> pose(const std::string& trajectory) const;
   /// The finest level, for rendering and export.
   const GridMap2d& grid() const { return map_; }
-  /// Counts map updates; changes whenever grid() changed.
+  /// Counts map updates and re-renderings; changes whenever grid() changed.
   uint64_t version() const { return version_; }
   const Slam2dOptions& options() const { return options_; }
+
+  /// Loop closures accepted (through an optimisation) since the last call.
+  std::vector<LoopClosure2d> takeLoopClosures();
+  /// Every scan's robot pose in scan order, corrected by the pose graph (each
+  /// scan rides on the keyframe before it); empty for an unknown trajectory.
+  std::vector<StampedPose2> trajectory(const std::string& trajectory) const;
+  /// Increments after each optimisation that moved poses; grid() is then
+  /// re-rendered from the keyframes at their corrected poses (version() changes too).
+  uint64_t graphVersion() const { return graph_version_; }
+  /// Loop closure counters and timing; nullptr when loop closure is off.
+  const LoopClosureStats* loopClosureStats() const { return loop_closer_ ? &loop_closer_->stats() : nullptr; }
+  size_t keyframeCount() const { return keyframes_.size(); }
 
  private:
   struct Trajectory {
@@ -148,6 +172,15 @@ class Slam2d {
     Pose2 last_increment;           ///< motion of the last scan, the prediction without odometry
     Pose2 last_update_pose;         ///< pose at the last map update
     std::optional<double> match_residual;  ///< running mean of the matches' mean residual (see relock_*)
+    size_t index = 0;                      ///< into names_ and scans_
+    std::optional<size_t> keyframe;        ///< its newest keyframe
+  };
+
+  /// A scan's pose relative to the keyframe before it (absolute when none).
+  struct ScanRecord {
+    int64_t stamp_ns = 0;
+    std::optional<size_t> keyframe;
+    Pose2 relative;
   };
 
   struct ScannerModel {
@@ -158,12 +191,21 @@ class Slam2d {
 
   /// Self-calibrates `model` from its sample when ready; fuses the sample on success.
   void maybeSelfCalibrate(ScannerModel& model);
+  /// After the graph moved keyframes: the map is rendered again from them and
+  /// every trajectory's pose follows its newest keyframe.
+  void applyCorrection(const std::vector<std::pair<Pose2, Pose2>>& relative_to_keyframe);
 
   Slam2dOptions options_;
   GridMap2d map_;
   std::unordered_map<std::string, ScannerModel> models_;
   std::unordered_map<std::string, Trajectory> trajectories_;
+  std::vector<std::string> names_;             ///< trajectory names by index
+  std::vector<std::vector<ScanRecord>> scans_;  ///< by trajectory index
+  /// Every map update's scan; without loop closure only stamp, pose and trajectory are kept.
+  std::vector<Keyframe> keyframes_;
+  std::unique_ptr<LoopCloser> loop_closer_;
   uint64_t version_ = 0;
+  uint64_t graph_version_ = 0;
 };
 
 }  // namespace rmap::slam2d

@@ -1,0 +1,249 @@
+#include "slam2d/loop_closure.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <stdexcept>
+
+namespace rmap::slam2d {
+
+namespace {
+
+void require(bool ok, const std::string& what) {
+  if (!ok) throw std::invalid_argument("LoopClosureOptions: " + what);
+}
+
+bool positive(double v) { return v > 0.0 && std::isfinite(v); }
+bool nonNegative(double v) { return v >= 0.0 && std::isfinite(v); }
+
+Eigen::Matrix3d diagonalInformation(double sigma_m, double sigma_rad) {
+  return Eigen::Vector3d(1.0 / (sigma_m * sigma_m), 1.0 / (sigma_m * sigma_m), 1.0 / (sigma_rad * sigma_rad))
+      .asDiagonal();
+}
+
+graph::Pose2d toGraph(const Pose2& p) { return {p.x_m, p.y_m, p.theta_rad}; }
+
+double secondsSince(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+}  // namespace
+
+void LoopClosureOptions::validate() const {
+  require(submap_keyframes >= 2, "submap_keyframes must be ≥ 2");
+  require(exclude_recent_submaps >= 0, "exclude_recent_submaps must be ≥ 0");
+  require(search_every_keyframes >= 1, "search_every_keyframes must be ≥ 1");
+  require(max_candidates >= 1, "max_candidates must be ≥ 1");
+  require(nonNegative(window_m) && nonNegative(window_growth_m_per_m) && max_window_m >= window_m &&
+              max_window_m <= 50.0,
+          "need 0 ≤ window_m ≤ max_window_m ≤ 50 and a growth ≥ 0");
+  require(nonNegative(window_rad) && nonNegative(window_growth_rad_per_m) && max_window_rad >= window_rad &&
+              max_window_rad <= 3.14159,
+          "need 0 ≤ window_rad ≤ max_window_rad ≤ π and a growth ≥ 0");
+  require(nonNegative(candidate_distance_m), "candidate_distance_m must be ≥ 0");
+  require(min_score > 0.0 && min_score <= 1.0, "min_score must be in (0, 1]");
+  require(nonNegative(small_correction_m) && nonNegative(small_correction_rad), "small_correction_* must be ≥ 0");
+  require(support_keyframes >= 0, "support_keyframes must be ≥ 0");
+  require(nonNegative(support_tolerance_m) && nonNegative(support_tolerance_rad), "support_tolerance_* must be ≥ 0");
+  require(optimize_every_keyframes >= 1, "optimize_every_keyframes must be ≥ 1");
+  require(positive(sequential_sigma_m) && positive(sequential_sigma_rad) && positive(loop_sigma_m) &&
+              positive(loop_sigma_rad),
+          "edge standard deviations must be finite and > 0");
+  require(positive(max_loop_error_m) && positive(max_loop_error_rad), "max_loop_error_* must be > 0");
+  require(cached_submaps >= 1, "cached_submaps must be ≥ 1");
+  require(submap.levels >= 1 && submap.levels <= 8, "submap.levels must be in [1, 8]");
+  require(submap.unknown_probability >= 0.0f && submap.unknown_probability <= 1.0f,
+          "submap.unknown_probability must be in [0, 1]");
+  require(nonNegative(submap.max_refinement_shift_m) && nonNegative(submap.max_refinement_shift_rad),
+          "submap.max_refinement_shift_* must be ≥ 0");
+  submap.correlative.validate();
+  graph.validate();
+}
+
+LoopCloser::LoopCloser(LoopClosureOptions options)
+    : options_((options.validate(), options)), graph_(options_.graph) {}
+
+Pose2 LoopCloser::graphPose(size_t node) const {
+  const graph::Pose2d& p = graph_.pose(node);
+  return {p[0], p[1], p[2]};
+}
+
+bool LoopCloser::addKeyframe(std::vector<Keyframe>& keyframes) {
+  const size_t q = keyframes.size() - 1;
+  const Keyframe& kf = keyframes[q];
+  if (graph_.nodeCount() != q) throw std::logic_error("LoopCloser::addKeyframe: keyframes out of step with the graph");
+  graph_.addNode(toGraph(kf.pose));
+  if (kf.trajectory >= trajectories_.size()) trajectories_.resize(kf.trajectory + 1);
+  TrajectoryState& trajectory = trajectories_[kf.trajectory];
+  if (trajectory.last_keyframe) {
+    const Pose2 step = between(keyframes[*trajectory.last_keyframe].pose, kf.pose);
+    graph_.addEdge({*trajectory.last_keyframe, q, toGraph(step),
+                    diagonalInformation(options_.sequential_sigma_m, options_.sequential_sigma_rad), false});
+    trajectory.travel_since_closure_m += step.translation().norm();
+  }
+  if (!trajectory.last_keyframe || submaps_[trajectory.open_submap].finished) {
+    submaps_.push_back({kf.trajectory, {}, false});
+    trajectory.open_submap = submaps_.size() - 1;
+  }
+  SubmapInfo& open = submaps_[trajectory.open_submap];
+  open.keyframes.push_back(q);
+  if (static_cast<int>(open.keyframes.size()) >= options_.submap_keyframes) {
+    open.finished = true;
+    trajectory.finished_submaps.push_back(trajectory.open_submap);
+  }
+  trajectory.last_keyframe = q;
+  ++trajectory.keyframes;
+  ++keyframe_count_;
+
+  if (trajectory.keyframes % static_cast<uint64_t>(options_.search_every_keyframes) == 0)
+    search(keyframes, q, trajectory);
+
+  // Support: a small correction agrees with the map as it is; a large one
+  // needs a second closure that implies the same correction.
+  bool large_correction = false;
+  for (Pending& p : pending_) {
+    if (p.supported) continue;
+    if (small(correction(p), graphPose(p.closure.query))) {
+      p.supported = true;
+      continue;
+    }
+    for (Pending& o : pending_) {
+      if (&o == &p || o.closure.query == p.closure.query || !agree(p, o)) continue;
+      p.supported = o.supported = true;
+      large_correction = true;
+    }
+  }
+  std::vector<Pending> still;
+  for (Pending& p : pending_) {
+    if (p.supported) {
+      const size_t e = graph_.addEdge({p.closure.match, p.closure.query, toGraph(p.closure.relative), p.information, true});
+      loop_edges_.push_back(e);
+      awaiting_.push_back({p.closure, e});
+      trajectories_[keyframes[p.closure.query].trajectory].travel_since_closure_m = 0.0;
+    } else if (keyframe_count_ - p.added_at <= static_cast<uint64_t>(options_.support_keyframes)) {
+      still.push_back(p);
+    } else {
+      ++stats_.unsupported;
+    }
+  }
+  pending_ = std::move(still);
+
+  if (awaiting_.empty()) return false;
+  if (!large_correction && keyframe_count_ - last_optimization_ < static_cast<uint64_t>(options_.optimize_every_keyframes))
+    return false;
+  return optimize(keyframes);
+}
+
+void LoopCloser::search(std::vector<Keyframe>& keyframes, size_t query, TrajectoryState& trajectory) {
+  const Keyframe& kf = keyframes[query];
+  if (kf.match_points.empty()) return;
+  const double travel = trajectory.travel_since_closure_m;
+  const double window_m = std::min(options_.max_window_m, options_.window_m + options_.window_growth_m_per_m * travel);
+  const double window_rad =
+      std::min(options_.max_window_rad, options_.window_rad + options_.window_growth_rad_per_m * travel);
+  const Eigen::Vector2d position = kf.pose.translation();
+  const size_t recent = std::min(trajectory.finished_submaps.size(), static_cast<size_t>(options_.exclude_recent_submaps));
+  const auto excluded = [&](size_t s) {
+    return std::find(trajectory.finished_submaps.end() - static_cast<std::ptrdiff_t>(recent),
+                     trajectory.finished_submaps.end(), s) != trajectory.finished_submaps.end();
+  };
+  std::vector<std::pair<double, size_t>> candidates;
+  const double reach2 = std::pow(window_m + options_.candidate_distance_m, 2);
+  for (size_t s = 0; s < submaps_.size(); ++s) {
+    const SubmapInfo& submap = submaps_[s];
+    if (!submap.finished || (submap.trajectory == kf.trajectory && excluded(s))) continue;
+    double nearest2 = reach2;
+    for (size_t k : submap.keyframes) nearest2 = std::min(nearest2, (keyframes[k].pose.translation() - position).squaredNorm());
+    if (nearest2 < reach2) candidates.emplace_back(nearest2, s);
+  }
+  std::sort(candidates.begin(), candidates.end());
+  if (candidates.size() > static_cast<size_t>(options_.max_candidates)) candidates.resize(static_cast<size_t>(options_.max_candidates));
+
+  const auto t0 = std::chrono::steady_clock::now();
+  for (const auto& [distance2, s] : candidates) {
+    const size_t anchor = submaps_[s].anchor();
+    const Pose2 center = between(keyframes[anchor].pose, kf.pose);
+    ++stats_.searches;
+    const std::optional<SubmapMatch> m =
+        matcher(keyframes, s).match(kf.match_points, center, window_m, window_rad, options_.min_score);
+    if (!m) continue;
+    ++stats_.matches;
+    pending_.push_back({{query, anchor, m->score, m->pose},
+                        diagonalInformation(options_.loop_sigma_m, options_.loop_sigma_rad),
+                        keyframe_count_,
+                        false});
+  }
+  stats_.search_s += secondsSince(t0);
+}
+
+const SubmapMatcher& LoopCloser::matcher(const std::vector<Keyframe>& keyframes, size_t submap) {
+  for (auto it = cache_.begin(); it != cache_.end(); ++it) {
+    if (it->first != submap) continue;
+    cache_.splice(cache_.begin(), cache_, it);
+    return *cache_.front().second;
+  }
+  const SubmapInfo& info = submaps_[submap];
+  std::vector<const Keyframe*> members;
+  for (size_t k : info.keyframes) members.push_back(&keyframes[k]);
+  cache_.emplace_front(submap, std::make_unique<SubmapMatcher>(members, keyframes[info.anchor()].pose, options_.submap));
+  ++stats_.submaps_built;
+  if (cache_.size() > static_cast<size_t>(options_.cached_submaps)) cache_.pop_back();
+  return *cache_.front().second;
+}
+
+Pose2 LoopCloser::correction(const Pending& p) const {
+  return (graphPose(p.closure.match) * p.closure.relative) * graphPose(p.closure.query).inverse();
+}
+
+bool LoopCloser::small(const Pose2& c, const Pose2& at) const {
+  return ((c * at.translation()) - at.translation()).norm() <= options_.small_correction_m &&
+         std::abs(c.theta_rad) <= options_.small_correction_rad;
+}
+
+bool LoopCloser::agree(const Pending& a, const Pending& b) const {
+  const Pose2 ca = correction(a), cb = correction(b);
+  const Eigen::Vector2d p = graphPose(b.closure.query).translation();
+  return (ca * p - cb * p).norm() <= options_.support_tolerance_m &&
+         std::abs(normalizeAngle(ca.theta_rad - cb.theta_rad)) <= options_.support_tolerance_rad;
+}
+
+bool LoopCloser::optimize(std::vector<Keyframe>& keyframes) {
+  const auto t0 = std::chrono::steady_clock::now();
+  last_optimization_ = keyframe_count_;
+  ++stats_.optimizations;
+  bool usable = graph_.optimize().usable;
+  bool rejected = false;
+  for (size_t e : loop_edges_) {
+    if (!graph_.edgeEnabled(e)) continue;
+    const graph::Pose2d error = graph_.edgeError(e);
+    if (error.head<2>().norm() > options_.max_loop_error_m || std::abs(error[2]) > options_.max_loop_error_rad) {
+      graph_.disableEdge(e);
+      ++stats_.rejected_after_optimization;
+      rejected = true;
+    }
+  }
+  if (rejected) usable = graph_.optimize().usable || usable;
+  for (const Awaiting& a : awaiting_) {
+    if (!graph_.edgeEnabled(a.edge)) continue;
+    accepted_.push_back(a.closure);
+    ++stats_.accepted;
+  }
+  awaiting_.clear();
+  bool moved = false;
+  for (size_t i = 0; i < keyframes.size(); ++i) {
+    const Pose2 p = graphPose(i);
+    const Pose2 d = between(keyframes[i].pose, p);
+    moved = moved || d.translation().norm() > 1e-4 || std::abs(d.theta_rad) > 1e-5;
+    keyframes[i].pose = p;
+  }
+  stats_.optimization_s += secondsSince(t0);
+  return usable && moved;
+}
+
+std::vector<LoopCloser::Closure> LoopCloser::takeClosures() {
+  std::vector<Closure> out;
+  out.swap(accepted_);
+  return out;
+}
+
+}  // namespace rmap::slam2d

@@ -1,0 +1,181 @@
+#pragma once
+/// @file loop_closure.h
+/// Geometric loop closure for the 2D SLAM (Cartographer / Karto style) on top
+/// of the Hector front end.
+///
+/// Every keyframe (map-update scan) becomes a node of a pose graph, joined to
+/// the previous keyframe of its trajectory by the front end's relative pose.
+/// Keyframes are grouped into submaps of `submap_keyframes` consecutive ones
+/// per trajectory. Each new keyframe is matched against finished submaps of
+/// any trajectory (closures between trajectories are the cross-robot ones),
+/// except its own trajectory's most recent ones, that lie within the search
+/// window of its pose: ± window_m and ± window_rad, growing with the distance
+/// the trajectory travelled since its last closure (the drift it may have
+/// gathered). The branch-and-bound correlative matcher searches the window,
+/// Gauss–Newton refines; a match is kept when its score reaches min_score.
+///
+/// Verification, because one false closure bends the whole map:
+///  1. score threshold and a refinement that stays in the found basin;
+///  2. a closure whose correction of the current estimate is large (beyond
+///     small_correction_m / _rad) needs support: another closure of a nearby
+///     keyframe implying the same correction, within support_keyframes;
+///     unsupported ones are dropped;
+///  3. loop edges carry a Huber loss, and after each optimisation a loop edge
+///     still off by more than max_loop_error_m / _rad is disabled and the
+///     graph optimised again.
+/// The graph is optimised when supported closures wait and either
+/// optimize_every_keyframes keyframes passed since the last optimisation or
+/// one of them corrects the estimate by more than small_correction_m.
+/// No I/O, no threads.
+
+#include <cstdint>
+#include <list>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "graph/pose_graph_2d.h"
+#include "slam2d/correlative_matcher.h"
+#include "slam2d/keyframe.h"
+#include "slam2d/pose2.h"
+#include "slam2d/submap.h"
+
+namespace rmap::slam2d {
+
+/// All defaults are fixed across datasets.
+struct LoopClosureOptions {
+  bool enabled = true;
+  int submap_keyframes = 30;        ///< keyframes per submap
+  int exclude_recent_submaps = 2;   ///< a trajectory's newest finished submaps it is not matched against
+  int search_every_keyframes = 1;   ///< every n-th keyframe of a trajectory searches
+  int max_candidates = 3;           ///< submaps tried per searching keyframe, nearest first
+  /// Search window half-widths: base + growth · (m travelled since the
+  /// trajectory's last closure), capped.
+  double window_m = 1.0;
+  double window_growth_m_per_m = 0.05;
+  double max_window_m = 5.0;
+  double window_rad = 0.3;
+  double window_growth_rad_per_m = 0.003;
+  double max_window_rad = 0.8;
+  /// A submap is a candidate when one of its keyframes lies within window +
+  /// this of the keyframe's current position.
+  double candidate_distance_m = 3.0;
+  double min_score = 0.55;          ///< correlative score a closure needs (0..1)
+  double small_correction_m = 0.15;
+  double small_correction_rad = 0.05;
+  int support_keyframes = 10;       ///< keyframes an unsupported closure waits for support
+  double support_tolerance_m = 0.15;   ///< two closures agree when their corrections differ by less
+  double support_tolerance_rad = 0.05;
+  int optimize_every_keyframes = 20;
+  /// Standard deviations of the edges: between consecutive keyframes (the
+  /// front end's relative pose) and of a loop closure match.
+  double sequential_sigma_m = 0.02;
+  double sequential_sigma_rad = 0.005;
+  double loop_sigma_m = 0.05;
+  double loop_sigma_rad = 0.02;
+  double max_loop_error_m = 0.3;    ///< after optimisation, loop edges further off are rejected
+  double max_loop_error_rad = 0.1;
+  int cached_submaps = 8;           ///< built submap matchers kept (each costs its raster and levels)
+  SubmapMatcherOptions submap;      ///< resolution and occupancy are set from Slam2dOptions
+  graph::PoseGraphOptions graph;
+
+  /// @throws std::invalid_argument naming the first bad option
+  void validate() const;
+};
+
+/// One accepted geometric closure.
+struct LoopClosure2d {
+  std::string query_trajectory;
+  int64_t query_stamp_ns = 0;
+  Pose2 query_pose;       ///< the new scan's robot pose (corrected) when accepted
+  std::string match_trajectory;
+  int64_t match_stamp_ns = 0;
+  Pose2 match_pose;       ///< the older keyframe it closed on (corrected), the anchor of the matched submap
+  double score = 0.0;     ///< correlative match score 0..1
+  Pose2 relative;         ///< the matched pose of the query in match_pose's frame (the loop edge's measurement)
+};
+
+/// Counters and timing of the loop closure, for benchmarks.
+struct LoopClosureStats {
+  uint64_t searches = 0;       ///< correlative searches run (keyframe × candidate submap)
+  uint64_t matches = 0;        ///< searches that found a verified match
+  uint64_t accepted = 0;       ///< closures that entered the graph
+  uint64_t unsupported = 0;    ///< dropped for lack of support
+  uint64_t rejected_after_optimization = 0;
+  uint64_t optimizations = 0;
+  double search_s = 0.0, optimization_s = 0.0;  ///< wall time (steady clock)
+  uint64_t submaps_built = 0;
+};
+
+/// The back end: pose graph, submaps, search and verification. Keyframes are
+/// owned by the caller and indexed the same as graph nodes.
+class LoopCloser {
+ public:
+  /// @throws std::invalid_argument for bad options
+  explicit LoopCloser(LoopClosureOptions options);
+
+  /// Adds keyframes.back() (its pose the front end's estimate), searches
+  /// and, when due, optimises, writing corrected poses into `keyframes`.
+  /// @return true when keyframe poses moved
+  bool addKeyframe(std::vector<Keyframe>& keyframes);
+
+  /// Closures accepted since the last call, as keyframe indices.
+  struct Closure {
+    size_t query = 0, match = 0;
+    double score = 0.0;
+    Pose2 relative;
+  };
+  std::vector<Closure> takeClosures();
+  const LoopClosureStats& stats() const { return stats_; }
+  const LoopClosureOptions& options() const { return options_; }
+
+ private:
+  struct SubmapInfo {
+    size_t trajectory = 0;
+    std::vector<size_t> keyframes;
+    bool finished = false;
+    size_t anchor() const { return keyframes[keyframes.size() / 2]; }
+  };
+  struct TrajectoryState {
+    std::optional<size_t> last_keyframe;
+    size_t open_submap = 0;
+    std::vector<size_t> finished_submaps;
+    double travel_since_closure_m = 0.0;
+    uint64_t keyframes = 0;
+  };
+  struct Pending {
+    Closure closure;
+    Eigen::Matrix3d information;
+    uint64_t added_at = 0;  ///< keyframe count when found
+    bool supported = false;
+  };
+  struct Awaiting {  ///< in the graph, not yet through an optimisation
+    Closure closure;
+    size_t edge = 0;
+  };
+
+  void search(std::vector<Keyframe>& keyframes, size_t query, TrajectoryState& trajectory);
+  const SubmapMatcher& matcher(const std::vector<Keyframe>& keyframes, size_t submap);
+  /// The map-frame motion that moves the query keyframe where the closure says it is.
+  Pose2 correction(const Pending& pending) const;
+  bool agree(const Pending& a, const Pending& b) const;
+  bool small(const Pose2& correction, const Pose2& at) const;
+  bool optimize(std::vector<Keyframe>& keyframes);
+  Pose2 graphPose(size_t node) const;
+
+  LoopClosureOptions options_;
+  graph::PoseGraph2d graph_;
+  std::vector<SubmapInfo> submaps_;
+  std::vector<TrajectoryState> trajectories_;
+  std::list<std::pair<size_t, std::unique_ptr<SubmapMatcher>>> cache_;  ///< most recently used first
+  std::vector<Pending> pending_;
+  std::vector<Awaiting> awaiting_;
+  std::vector<size_t> loop_edges_;
+  std::vector<Closure> accepted_;
+  uint64_t keyframe_count_ = 0;
+  uint64_t last_optimization_ = 0;
+  LoopClosureStats stats_;
+};
+
+}  // namespace rmap::slam2d
