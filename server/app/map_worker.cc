@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <map>
+#include <set>
 
 #include "app/camera_frames.h"
 #include "app/ingest.h"
@@ -61,12 +62,13 @@ MapWorker::MapWorker(std::string name, std::unique_ptr<map3d::CuboidMap> map, in
       store_(store),
       metrics_(metrics),
       pose_sink_(std::move(pose_sink)),
+      loop_sink_(std::move(loop.sink)),
       slam2d_(slam2d.calibrations, metrics),
       sensors_(slam2d.sensors),
       estimate_sink_(std::move(slam2d.estimate_sink)),
       slam_first_input_id_(slam2d.first_input_id),
       loop_first_input_id_(loop.first_input_id),
-      loop_feed_(std::make_unique<LoopClosureFeed>(name_, loop.recognizers, std::move(loop.sink), metrics,
+      loop_feed_(std::make_unique<LoopClosureFeed>(name_, loop.recognizers, loop_sink_, metrics,
                                                    kLoopQueueFrames)),
       restored_id_(applied_id),
       applied_id_(applied_id),
@@ -296,9 +298,9 @@ void MapWorker::applyScan(int64_t log_id, const v1::RobotMessage& message, const
   const std::optional<Slam2dResult> result = slam2d_.addScan(robot_id, scan, laser);
   if (!result) return;
   feedPatch(log_id, robot_id, scan.stamp_ns(), result->base_pose);
-  if (in_map3d) return;
   // The scan in the 3D map: a planar cloud at the laser's mounting height above the map's z = 0.
-  const double height_m = laser ? laser->z_m : 0.0;
+  PlanarScan planar{scan.stamp_ns(), message.seq(), result->base_pose, result->scan.sensor_mount,
+                    laser ? laser->z_m : 0.0, 0.0f, false};
   const slam2d::Pose2& sensor = result->sensor_pose;
   std::vector<Eigen::Vector3f> points;
   points.reserve(result->scan.ranges_m.size());
@@ -308,32 +310,121 @@ void MapWorker::applyScan(int64_t log_id, const v1::RobotMessage& message, const
     if (!std::isfinite(r) || r < range_min_m || r > result->scan.range_max_m) continue;
     const float a = result->scan.angles_rad[i];
     const Eigen::Vector2d p = sensor * Eigen::Vector2d(r * std::cos(a), r * std::sin(a));
-    points.emplace_back(static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(height_m));
+    points.emplace_back(static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(planar.height_m));
+    planar.reach_m = std::max(planar.reach_m, r);
   }
   const Eigen::Vector3f origin(static_cast<float>(sensor.x_m), static_cast<float>(sensor.y_m),
-                               static_cast<float>(height_m));
+                               static_cast<float>(planar.height_m));
   map3d::CellKey origin_cell;
-  if (!points.empty() && map_->grid().cellChecked(origin, origin_cell)) {
-    map3d::InsertOptions options;
-    options.threads = config_.maps.insert_threads;
-    options.invalid_points = map3d::InvalidPoints::kSkip;
-    const map3d::ScanStats stats = map_->insertScan(origin, points, options);
-    metrics_.points_integrated.fetch_add(stats.points - stats.rejected_points, std::memory_order_relaxed);
+  planar.in_map3d = !points.empty() && map_->grid().cellChecked(origin, origin_cell);
+  planar_scans_[robot_id].push_back(planar);
+  for (const slam2d::LoopClosure2d& c : result->closures) {
+    if (!loop_sink_) break;
+    try {
+      loop_sink_({name_, LoopSource::kGeometry, {c.query_trajectory, c.query_stamp_ns, planarIsometry(c.query_pose, 0.0)},
+                  {c.match_trajectory, c.match_stamp_ns, planarIsometry(c.match_pose, 0.0)}, c.score});
+    } catch (const std::exception& e) {
+      spdlog::error("map {}: loop closure not stored: {}", name_, e.what());
+    }
   }
-  const RobotPose pose{robot_id, name_, message.seq(), scan.stamp_ns(), planarIsometry(result->base_pose, 0.0)};
-  pending_poses_.emplace_back(robot_id, toTrajectoryPose(pose));
-  publishPose(pose);
-  if (live && estimate_sink_) {
-    v1::PoseEstimate estimate;
-    estimate.set_seq(message.seq());
-    estimate.set_stamp_ns(scan.stamp_ns());
-    const Eigen::Quaterniond q(pose.pose.linear());
-    estimate.mutable_pose()->mutable_position_m()->set_x(result->base_pose.x_m);
-    estimate.mutable_pose()->mutable_position_m()->set_y(result->base_pose.y_m);
-    estimate.mutable_pose()->mutable_orientation()->set_w(q.w());
-    estimate.mutable_pose()->mutable_orientation()->set_z(q.z());
-    estimate_sink_(robot_id, estimate);
+  if (!in_map3d) {
+    if (planar.in_map3d) {
+      map3d::InsertOptions options;
+      options.threads = config_.maps.insert_threads;
+      options.invalid_points = map3d::InvalidPoints::kSkip;
+      const map3d::ScanStats stats = map_->insertScan(origin, points, options);
+      metrics_.points_integrated.fetch_add(stats.points - stats.rejected_points, std::memory_order_relaxed);
+    }
+    const RobotPose pose{robot_id, name_, message.seq(), scan.stamp_ns(), planarIsometry(result->base_pose, 0.0)};
+    pending_poses_.emplace_back(robot_id, toTrajectoryPose(pose));
+    publishPose(pose);
+    if (live && estimate_sink_) {
+      v1::PoseEstimate estimate;
+      estimate.set_seq(message.seq());
+      estimate.set_stamp_ns(scan.stamp_ns());
+      const Eigen::Quaterniond q(pose.pose.linear());
+      estimate.mutable_pose()->mutable_position_m()->set_x(result->base_pose.x_m);
+      estimate.mutable_pose()->mutable_position_m()->set_y(result->base_pose.y_m);
+      estimate.mutable_pose()->mutable_orientation()->set_w(q.w());
+      estimate.mutable_pose()->mutable_orientation()->set_z(q.z());
+      estimate_sink_(robot_id, estimate);
+    }
   }
+  if (result->graph_changed) applyCorrection(in_map3d);
+}
+
+void MapWorker::applyCorrection(bool in_map3d) {
+  const auto start = Clock::now();
+  const double cell_m = map_->resolution();
+  Eigen::AlignedBox2d region;  // where moved scans drew their planar clouds, before and after
+  std::set<int32_t> rows;       // z cells of those clouds
+  for (auto& [robot, scans] : planar_scans_) {
+    const std::vector<slam2d::StampedPose2> corrected = slam2d_.trajectory(robot);
+    if (corrected.size() != scans.size()) {
+      spdlog::error("map {}: the SLAM corrected {} scans of {}, the map holds {}; not corrected", name_,
+                    corrected.size(), robot, scans.size());
+      continue;
+    }
+    for (size_t i = 0; i < scans.size(); ++i) {
+      PlanarScan& s = scans[i];
+      const slam2d::Pose2& p = corrected[i].pose;
+      // Moved when some beam end may land in another 3D cell.
+      const double shift_m = Eigen::Vector2d(p.x_m - s.base_pose.x_m, p.y_m - s.base_pose.y_m).norm() +
+                             std::abs(slam2d::normalizeAngle(p.theta_rad - s.base_pose.theta_rad)) * s.reach_m;
+      if (shift_m < cell_m / 2) continue;
+      if (s.in_map3d) {
+        for (const slam2d::Pose2& base : {s.base_pose, p}) {
+          const slam2d::Pose2 laser = base * s.mount;
+          const Eigen::Vector2d reach = Eigen::Vector2d::Constant(s.reach_m);
+          region.extend(Eigen::Vector2d(laser.x_m, laser.y_m) - reach);
+          region.extend(Eigen::Vector2d(laser.x_m, laser.y_m) + reach);
+        }
+        rows.insert(map_->grid().index(s.height_m));
+      }
+      s.base_pose = p;
+      if (!in_map3d) {
+        pending_poses_.emplace_back(robot, toTrajectoryPose({robot, name_, s.seq, s.stamp_ns, planarIsometry(p, 0.0)}));
+      }
+    }
+    if (!in_map3d && !scans.empty()) {
+      const PlanarScan& last = scans.back();
+      publishPose({robot, name_, last.seq, last.stamp_ns, planarIsometry(last.base_pose, 0.0)});
+    }
+  }
+  // Below the 3D snapshot the snapshot holds the planar rows as later scans left them.
+  if (!in_map3d && !region.isEmpty()) rewritePlanarRows(region, rows);
+  metrics_.trajectory_corrections.fetch_add(1, std::memory_order_relaxed);
+  metrics_.correction_latency.observe(std::chrono::duration<double>(Clock::now() - start).count());
+}
+
+void MapWorker::rewritePlanarRows(const Eigen::AlignedBox2d& region_m, const std::set<int32_t>& rows) {
+  const map3d::Grid& grid = map_->grid();
+  const auto clampCell = [](int32_t c) { return std::clamp(c, -map3d::kCellLimit, map3d::kCellLimit - 1); };
+  const int32_t x0 = clampCell(grid.index(region_m.min().x())), x1 = clampCell(grid.index(region_m.max().x()));
+  const int32_t y0 = clampCell(grid.index(region_m.min().y())), y1 = clampCell(grid.index(region_m.max().y()));
+  slam2d_.read([&](const Grid2dSource& grid2d) {
+    const double r3 = grid.resolution(), r2 = grid2d.resolutionM();
+    // A 3D cell takes the highest occupancy of the 2D cells under it (occupied if any is, like the
+    // 3D map's own coarse levels), unknown when none of them is known.
+    const auto value = [&](const map3d::CellKey& c) -> std::optional<float> {
+      const int i0 = static_cast<int>(std::floor(c.x * r3 / r2 + 1e-9));
+      const int i1 = static_cast<int>(std::floor((c.x + 1) * r3 / r2 - 1e-9));
+      const int j0 = static_cast<int>(std::floor(c.y * r3 / r2 + 1e-9));
+      const int j1 = static_cast<int>(std::floor((c.y + 1) * r3 / r2 - 1e-9));
+      float best = -1.0f;
+      for (int j = j0; j <= j1; ++j) {
+        for (int i = i0; i <= i1; ++i) {
+          const float p = grid2d.probability({i, j});
+          if (std::isfinite(p)) best = std::max(best, p);
+        }
+      }
+      if (best < 0.0f) return std::nullopt;
+      const float p = std::clamp(best, 1e-4f, 1.0f - 1e-4f);
+      return std::log(p / (1.0f - p));
+    };
+    for (const int32_t z : rows) map_->rewriteCells({x0, y0, z}, {x1, y1, z}, value);
+    return 0;
+  });
 }
 
 void MapWorker::flushTrajectories() {

@@ -13,6 +13,7 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <set>
 #include <mutex>
 #include <string>
 #include <thread>
@@ -123,6 +124,12 @@ class MapWorker {
   void applyScan(int64_t log_id, const v1::RobotMessage& message, const std::string& robot_id, bool in_map3d,
                  bool live);
   void applyCloud(const v1::RobotMessage& message, const std::string& robot_id);
+  /// After the pose graph moved poses: the moved scans' trajectory poses and robots' poses follow,
+  /// and the 3D map's planar rows where they drew are rendered again from the corrected 2D grid.
+  /// @param in_map3d  the scan that triggered it is below the 3D snapshot (only the bookkeeping moves)
+  void applyCorrection(bool in_map3d);
+  /// Rewrites the 3D cells of rows `rows` (z cells) over `region_m` from the 2D grid.
+  void rewritePlanarRows(const Eigen::AlignedBox2d& region_m, const std::set<int32_t>& rows);
   void noteSlamInput(int64_t log_id);
   /// Queues a camera image for place recognition, when camera recognition is on.
   void feedImage(int64_t log_id, const v1::RobotMessage& message, const std::string& robot_id);
@@ -141,6 +148,7 @@ class MapWorker {
   store::Store& store_;
   Metrics& metrics_;
   PoseSink pose_sink_;
+  LoopClosureSink loop_sink_;
   TileIndex tiles_;
   Slam2dLayer slam2d_;
   const RobotSensors& sensors_;
@@ -148,6 +156,17 @@ class MapWorker {
   int64_t slam_first_input_id_;
   int64_t loop_first_input_id_;
   std::map<std::string, RobotPose> last_poses_;  ///< worker thread only: places of frames without their own pose
+  /// A scan as it went into the 3D map, to find what a correction moved.
+  struct PlanarScan {
+    int64_t stamp_ns = 0;
+    uint64_t seq = 0;
+    slam2d::Pose2 base_pose;  ///< robot base where its planar cloud was drawn (or last re-rendered)
+    slam2d::Pose2 mount;      ///< laser in the robot base
+    double height_m = 0.0;    ///< laser height of the planar cloud
+    float reach_m = 0.0f;     ///< longest beam drawn
+    bool in_map3d = false;    ///< the cloud was drawn (it had beams and an addressable origin)
+  };
+  std::map<std::string, std::vector<PlanarScan>> planar_scans_;  ///< worker thread only, per robot, scan order
   std::map<std::string, slam2d::Pose2> last_patch_;  ///< worker thread only: where each robot's last patch was taken
   /// Declared after what its callbacks use; stopped in stop().
   std::unique_ptr<LoopClosureFeed> loop_feed_;
