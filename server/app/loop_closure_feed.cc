@@ -21,13 +21,18 @@ LoopClosureFeed::LoopClosureFeed(std::string map, const RecognizerFactory& facto
 
 LoopClosureFeed::~LoopClosureFeed() { stop(); }
 
-void LoopClosureFeed::push(Frame frame) {
+bool LoopClosureFeed::push(Frame frame, bool wait) {
   if (!accepts(frame.kind)) throw std::invalid_argument("loop closure feed: no recognizer for this kind of frame");
   std::unique_lock lock(mutex_);
+  if (!wait && queue_.size() >= max_queued_) {
+    metrics_.loop_frames_dropped.fetch_add(1, std::memory_order_relaxed);
+    return false;
+  }
   changed_.wait(lock, [&] { return queue_.size() < max_queued_ || stopping_; });
-  if (stopping_) return;
+  if (stopping_) return false;
   queue_.push_back(std::move(frame));
   changed_.notify_all();
+  return true;
 }
 
 void LoopClosureFeed::drain() {

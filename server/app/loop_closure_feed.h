@@ -5,9 +5,11 @@
 /// the recognizer of their source; each accepted match becomes a LoopClosure
 /// between the two frames' places.
 ///
-/// The queue is bounded: a full queue holds the worker back (and with it the
-/// acks of later messages) for at most that many frames, and no frame is ever
-/// dropped, so a replay of the log finds the same closures.
+/// The queue is bounded. Live, a frame that finds it full is dropped (and
+/// counted) rather than holding the worker, and with it the acks of later
+/// messages, back; recovery waits instead, so a replay feeds every frame and
+/// may find closures the live run skipped (never one twice: the store keeps
+/// each closure once).
 
 #include <condition_variable>
 #include <deque>
@@ -46,8 +48,9 @@ class LoopClosureFeed {
 
   /// Whether frames of `kind` are recognised (its recognizer exists).
   bool accepts(FrameKind kind) const { return recognizers_.count(kind) > 0; }
-  /// Queues a frame of an accepted kind, waiting while the queue is full.
-  void push(Frame frame);
+  /// Queues a frame of an accepted kind. A full queue: waits when `wait`, else drops the frame.
+  /// @return whether the frame was queued
+  bool push(Frame frame, bool wait);
   /// Waits until every queued frame went through its recognizer.
   void drain();
   /// Processes what is queued and joins the thread; later calls do nothing.

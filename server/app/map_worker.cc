@@ -21,8 +21,12 @@ namespace {
 using Clock = std::chrono::steady_clock;
 constexpr auto kPoseFlushPeriod = std::chrono::milliseconds(500);
 constexpr size_t kPoseFlushCount = 512;
-/// Travel between two reflectivity patches of a 2D-laser robot (the default patch spans 8 m).
-constexpr double kPatchSpacing_m = 0.5;
+/// Place recognition takes a robot's next frame of a kind once it moved or turned this much
+/// since its last one (or, without poses, this much later): nearer frames show the same place,
+/// and a lidar at 10 Hz would otherwise keep a core busy.
+constexpr double kFrameSpacing_m = 0.5;
+constexpr double kFrameSpacing_rad = 0.5;
+constexpr int64_t kFrameSpacing_ns = 500'000'000;
 
 store::TrajectoryPose toTrajectoryPose(const RobotPose& p) {
   store::TrajectoryPose t;
@@ -187,13 +191,13 @@ void MapWorker::apply(int64_t log_id, const v1::RobotMessage& message, const std
     noteSlamInput(log_id);
     slam2d_.addOdometry(robot_id, message.odometry());
   } else if (message.body_case() == v1::RobotMessage::kImage) {
-    feedImage(log_id, message, robot_id);
+    feedImage(log_id, message, robot_id, live);
     if (!in_map3d && message.image().has_camera_pose()) {
       publishPose({robot_id, name_, message.seq(), message.image().stamp_ns(),
                    toIsometry(message.image().camera_pose())});
     }
   } else if (message.body_case() == v1::RobotMessage::kCloud) {
-    feedCloud(log_id, message, robot_id);
+    feedCloud(log_id, message, robot_id, live);
     // Below the snapshot, recovery replays the inputs of the 2D SLAM and place recognition only.
     if (!in_map3d) applyCloud(message, robot_id);
   }
@@ -232,9 +236,26 @@ void MapWorker::publishPose(const RobotPose& pose) {
   if (pose_sink_) pose_sink_(pose);
 }
 
-void MapWorker::feedImage(int64_t log_id, const v1::RobotMessage& message, const std::string& robot_id) {
+bool MapWorker::newPlace(FrameKind kind, const LoopPlace& place) {
+  const auto key = std::pair{kind, place.robot_id};
+  const auto last = last_frames_.find(key);
+  if (last != last_frames_.end()) {
+    const LoopPlace& before = last->second;
+    if (place.pose && before.pose) {
+      const Eigen::Isometry3d step = before.pose->inverse() * *place.pose;
+      if (step.translation().norm() < kFrameSpacing_m && Eigen::AngleAxisd(step.linear()).angle() < kFrameSpacing_rad) {
+        return false;
+      }
+    } else if (place.stamp_ns - before.stamp_ns < kFrameSpacing_ns) {
+      return false;
+    }
+  }
+  last_frames_[key] = place;
+  return true;
+}
+
+void MapWorker::feedImage(int64_t log_id, const v1::RobotMessage& message, const std::string& robot_id, bool live) {
   if (!loop_feed_->accepts(FrameKind::kCamera)) return;
-  noteLoopInput(log_id);
   const v1::CameraImage& image = message.image();
   // The camera's pose when the image carries one, else the robot's latest.
   LoopPlace place{robot_id, image.stamp_ns(), std::nullopt};
@@ -243,16 +264,19 @@ void MapWorker::feedImage(int64_t log_id, const v1::RobotMessage& message, const
   } else if (const auto it = last_poses_.find(robot_id); it != last_poses_.end()) {
     place.pose = it->second.pose;
   }
+  if (!newPlace(FrameKind::kCamera, place)) return;
+  noteLoopInput(log_id);
   // Decoded on the feed's thread, from a copy: the message goes once it is applied.
   auto copy = std::make_shared<const v1::CameraImage>(image);
-  loop_feed_->push({FrameKind::kCamera, std::move(place), [copy] { return cameraGray(*copy); }});
+  loop_feed_->push({FrameKind::kCamera, std::move(place), [copy] { return cameraGray(*copy); }}, !live);
 }
 
-void MapWorker::feedCloud(int64_t log_id, const v1::RobotMessage& message, const std::string& robot_id) {
+void MapWorker::feedCloud(int64_t log_id, const v1::RobotMessage& message, const std::string& robot_id, bool live) {
   const v1::PointCloud& cloud = message.cloud();
   if (cloud.intensities().empty() || !loop_feed_->accepts(FrameKind::kIntensityPanorama)) return;
-  noteLoopInput(log_id);
   const Eigen::Isometry3d sensor_pose = toIsometry(cloud.sensor_pose());
+  if (!newPlace(FrameKind::kIntensityPanorama, {robot_id, cloud.stamp_ns(), sensor_pose})) return;
+  noteLoopInput(log_id);
   // Projected on the feed's thread, from a copy: the message goes once it is applied.
   auto copy = std::make_shared<const v1::PointCloud>(cloud);
   loop_feed_->push({FrameKind::kIntensityPanorama, {robot_id, cloud.stamp_ns(), sensor_pose}, [copy, sensor_pose] {
@@ -269,26 +293,20 @@ void MapWorker::feedCloud(int64_t log_id, const v1::RobotMessage& message, const
                       return loop::projectPanorama(
                           points, std::span<const float>(copy->intensities().data(), copy->intensities().size()),
                           loop::PanoramaOptions{});
-                    }});
+                    }},
+                   !live);
 }
 
 void MapWorker::feedPatch(int64_t log_id, const std::string& robot_id, int64_t stamp_ns,
-                          const slam2d::Pose2& base_pose) {
+                          const slam2d::Pose2& base_pose, bool live) {
   if (!loop_feed_->accepts(FrameKind::kReflectivityPatch)) return;
-  // A patch every kPatchSpacing_m of travel: nearer ones show the same place.
-  const auto last = last_patch_.find(robot_id);
-  if (last != last_patch_.end() &&
-      (Eigen::Vector2d(base_pose.x_m, base_pose.y_m) - Eigen::Vector2d(last->second.x_m, last->second.y_m)).norm() <
-          kPatchSpacing_m) {
-    return;
-  }
-  last_patch_[robot_id] = base_pose;
+  LoopPlace place{robot_id, stamp_ns, planarIsometry(base_pose, 0.0)};
+  if (!newPlace(FrameKind::kReflectivityPatch, place)) return;
   noteLoopInput(log_id);
   // Rendered now: the 2D map changes with the next scans.
   cv::Mat patch = slam2d_.reflectivityPatch(base_pose, loop::PatchOptions{});
-  loop_feed_->push({FrameKind::kReflectivityPatch,
-                    {robot_id, stamp_ns, planarIsometry(base_pose, 0.0)},
-                    [patch = std::move(patch)] { return patch; }});
+  loop_feed_->push({FrameKind::kReflectivityPatch, std::move(place), [patch = std::move(patch)] { return patch; }},
+                   !live);
 }
 
 void MapWorker::applyScan(int64_t log_id, const v1::RobotMessage& message, const std::string& robot_id,
@@ -297,7 +315,7 @@ void MapWorker::applyScan(int64_t log_id, const v1::RobotMessage& message, const
   const std::optional<Laser2dSetup> laser = sensors_.laser(robot_id, message.seq(), scan.sensor());
   const std::optional<Slam2dResult> result = slam2d_.addScan(robot_id, scan, laser);
   if (!result) return;
-  feedPatch(log_id, robot_id, scan.stamp_ns(), result->base_pose);
+  feedPatch(log_id, robot_id, scan.stamp_ns(), result->base_pose, live);
   // The scan in the 3D map: a planar cloud at the laser's mounting height above the map's z = 0.
   PlanarScan planar{scan.stamp_ns(), message.seq(), result->base_pose, result->scan.sensor_mount,
                     laser ? laser->z_m : 0.0, 0.0f, false};

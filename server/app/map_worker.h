@@ -131,12 +131,17 @@ class MapWorker {
   /// Rewrites the 3D cells of rows `rows` (z cells) over `region_m` from the 2D grid.
   void rewritePlanarRows(const Eigen::AlignedBox2d& region_m, const std::set<int32_t>& rows);
   void noteSlamInput(int64_t log_id);
-  /// Queues a camera image for place recognition, when camera recognition is on.
-  void feedImage(int64_t log_id, const v1::RobotMessage& message, const std::string& robot_id);
-  /// Queues the intensity panorama of a cloud with intensities, when that recognition is on.
-  void feedCloud(int64_t log_id, const v1::RobotMessage& message, const std::string& robot_id);
-  /// Queues a reflectivity patch around a 2D-laser robot every so much travel, when that recognition is on.
-  void feedPatch(int64_t log_id, const std::string& robot_id, int64_t stamp_ns, const slam2d::Pose2& base_pose);
+  /// Whether a frame of `kind` at `place` is far enough from its robot's last one of that kind
+  /// (then it becomes the last one).
+  bool newPlace(FrameKind kind, const LoopPlace& place);
+  /// Queue frames for place recognition when that kind is on and the place is new; live
+  /// frames are dropped rather than waited for when recognition is behind.
+  void feedImage(int64_t log_id, const v1::RobotMessage& message, const std::string& robot_id, bool live);
+  /// The intensity panorama of a cloud with intensities.
+  void feedCloud(int64_t log_id, const v1::RobotMessage& message, const std::string& robot_id, bool live);
+  /// The reflectivity patch around a 2D-laser robot.
+  void feedPatch(int64_t log_id, const std::string& robot_id, int64_t stamp_ns, const slam2d::Pose2& base_pose,
+                 bool live);
   void noteLoopInput(int64_t log_id);
   void publishPose(const RobotPose& pose);
   void flushTrajectories();
@@ -167,7 +172,8 @@ class MapWorker {
     bool in_map3d = false;    ///< the cloud was drawn (it had beams and an addressable origin)
   };
   std::map<std::string, std::vector<PlanarScan>> planar_scans_;  ///< worker thread only, per robot, scan order
-  std::map<std::string, slam2d::Pose2> last_patch_;  ///< worker thread only: where each robot's last patch was taken
+  /// Worker thread only: each robot's last frame of each kind put to place recognition.
+  std::map<std::pair<FrameKind, std::string>, LoopPlace> last_frames_;
   /// Declared after what its callbacks use; stopped in stop().
   std::unique_ptr<LoopClosureFeed> loop_feed_;
   const int64_t restored_id_;  ///< log id of the snapshot the 3D map was restored from

@@ -96,6 +96,9 @@ std::string renderPrometheus(const Metrics& m, const MetricsGauges& g) {
          load(m.loop_frames));
   metric(out, "rmap_loop_frames_refused_total", "counter", "Frames place recognition could not decode.",
          load(m.loop_frames_refused));
+  metric(out, "rmap_loop_frames_dropped_total", "counter",
+         "Live frames skipped because place recognition was behind (acks never wait for it).",
+         load(m.loop_frames_dropped));
   metric(out, "rmap_trajectory_corrections_total", "counter",
          "2D pose graph optimisations applied to trajectories and maps.", load(m.trajectory_corrections));
   metric(out, "rmap_robot_connections", "gauge", "Open robot streams.", g.robot_connections);

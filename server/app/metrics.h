@@ -48,6 +48,7 @@ struct Metrics {
   std::array<std::atomic<uint64_t>, 3> loop_closures{};
   std::atomic<uint64_t> loop_frames{0};          ///< frames put through a place recognizer (replayed ones included)
   std::atomic<uint64_t> loop_frames_refused{0};  ///< frames that could not be made into a grey image
+  std::atomic<uint64_t> loop_frames_dropped{0};  ///< live frames dropped because place recognition was behind
   std::atomic<uint64_t> trajectory_corrections{0};  ///< 2D pose graph optimisations applied to trajectories and maps
   LatencyHistogram ack_latency;      ///< frame received → ack queued
   LatencyHistogram apply_latency;    ///< one message applied to its map

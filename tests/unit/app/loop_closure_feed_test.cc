@@ -45,14 +45,15 @@ TEST(LoopClosureFeed, AcceptedMatchesBecomeClosuresBetweenTheFramesPlaces) {
   EXPECT_TRUE(feed.accepts(FrameKind::kCamera));
   EXPECT_TRUE(feed.accepts(FrameKind::kReflectivityPatch));
   EXPECT_FALSE(feed.accepts(FrameKind::kIntensityPanorama));
-  EXPECT_THROW(feed.push(frame(FrameKind::kIntensityPanorama, "r1", 1, 10)), std::invalid_argument);
+  EXPECT_THROW(feed.push(frame(FrameKind::kIntensityPanorama, "r1", 1, 10), true), std::invalid_argument);
 
-  feed.push(frame(FrameKind::kCamera, "r1", 1, 100));
-  feed.push(frame(FrameKind::kReflectivityPatch, "r2", 2, 100));  // another recognizer: no match across kinds
-  feed.push(frame(FrameKind::kCamera, "r1", 3, 50));
+  feed.push(frame(FrameKind::kCamera, "r1", 1, 100), true);
+  feed.push(frame(FrameKind::kReflectivityPatch, "r2", 2, 100), true);  // another recognizer: no match across kinds
+  feed.push(frame(FrameKind::kCamera, "r1", 3, 50), true);
   // A frame that does not decode is skipped and takes no frame index.
-  feed.push({FrameKind::kCamera, {"r1", 4, std::nullopt}, []() -> cv::Mat { throw std::invalid_argument("bad"); }});
-  feed.push(frame(FrameKind::kCamera, "r2", 5, 100));  // camera frame 2 matches frame 0
+  feed.push({FrameKind::kCamera, {"r1", 4, std::nullopt}, []() -> cv::Mat { throw std::invalid_argument("bad"); }},
+            true);
+  feed.push(frame(FrameKind::kCamera, "r2", 5, 100), true);  // camera frame 2 matches frame 0
   feed.drain();
 
   ASSERT_EQ(out.closures.size(), 1u);
@@ -75,13 +76,33 @@ TEST(LoopClosureFeed, PatchClosuresReportLaserIntensity) {
   Collected out;
   LoopClosureFeed feed(
       "lab", [](FrameKind) { return std::make_unique<SameGreyRecognizer>(); }, out.sink(), metrics, 4);
-  for (int64_t i = 0; i < 3; ++i) feed.push(frame(FrameKind::kReflectivityPatch, "r1", i, i == 2 ? 7 : 7 + i));
+  for (int64_t i = 0; i < 3; ++i) feed.push(frame(FrameKind::kReflectivityPatch, "r1", i, i == 2 ? 7 : 7 + i), true);
   feed.drain();
   ASSERT_EQ(out.closures.size(), 1u);
   EXPECT_EQ(out.closures[0].source, LoopSource::kLaserIntensity);
 }
 
-TEST(LoopClosureFeed, AFullQueueHoldsThePusherBackAndDropsNothing) {
+TEST(LoopClosureFeed, ALiveFrameFindingTheQueueFullIsDroppedAtOnce) {
+  Metrics metrics;
+  Collected out;
+  std::promise<void> open;
+  std::shared_future<void> gate = open.get_future().share();
+  LoopClosureFeed feed(
+      "lab", [&](FrameKind) { return std::make_unique<SameGreyRecognizer>(gate); }, out.sink(), metrics, 1);
+  EXPECT_TRUE(feed.push(frame(FrameKind::kCamera, "r1", 0, 10), false));  // taken by the blocked recognizer
+  ASSERT_TRUE([&] {
+    for (int i = 0; i < 200 && feed.queued() > 0; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    return feed.queued() == 0;
+  }());
+  EXPECT_TRUE(feed.push(frame(FrameKind::kCamera, "r1", 1, 20), false));  // queued
+  EXPECT_FALSE(feed.push(frame(FrameKind::kCamera, "r1", 2, 30), false));  // full: dropped, no wait
+  EXPECT_EQ(metrics.loop_frames_dropped.load(), 1u);
+  open.set_value();
+  feed.drain();
+  EXPECT_EQ(metrics.loop_frames.load(), 2u);
+}
+
+TEST(LoopClosureFeed, AFullQueueHoldsAWaitingPusherBackAndDropsNothing) {
   Metrics metrics;
   Collected out;
   std::promise<void> open;
@@ -92,7 +113,7 @@ TEST(LoopClosureFeed, AFullQueueHoldsThePusherBackAndDropsNothing) {
   std::atomic<int> pushed{0};
   std::thread pusher([&] {
     for (int64_t i = 0; i < 4; ++i) {
-      feed.push(frame(FrameKind::kCamera, "r1", i, i == 3 ? 0 : static_cast<uint8_t>(10 + i)));
+      EXPECT_TRUE(feed.push(frame(FrameKind::kCamera, "r1", i, i == 3 ? 0 : static_cast<uint8_t>(10 + i)), true));
       ++pushed;
     }
   });
@@ -112,7 +133,7 @@ TEST(LoopClosureFeed, StopProcessesWhatIsQueued) {
   {
     LoopClosureFeed feed(
         "lab", [](FrameKind) { return std::make_unique<SameGreyRecognizer>(); }, out.sink(), metrics, 8);
-    for (int64_t i = 0; i < 4; ++i) feed.push(frame(FrameKind::kCamera, "r1", i, i == 3 ? 20 : 20 + i));
+    for (int64_t i = 0; i < 4; ++i) feed.push(frame(FrameKind::kCamera, "r1", i, i == 3 ? 20 : 20 + i), true);
   }
   EXPECT_EQ(metrics.loop_frames.load(), 4u);
   EXPECT_EQ(out.closures.size(), 1u);
