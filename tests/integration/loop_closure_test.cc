@@ -10,6 +10,8 @@
 #include <cmath>
 #include <map>
 #include <mutex>
+#include <set>
+#include <tuple>
 #include <thread>
 
 #include "api_helpers.h"
@@ -67,7 +69,7 @@ double meanError(const std::map<int64_t, Eigen::Vector3d>& poses, const std::map
 
 TEST(LoopClosure, TwoRobotsCrossingOnOneMapCloseALoopAndTheirTrajectoriesAreCorrected) {
   TempDir dir("rmap-loop");
-  RmapdProcess rmapd(dir.path() / "data");
+  auto rmapd = std::make_unique<RmapdProcess>(dir.path() / "data");
 
   sim::BuildingOptions building;
   building.max_furniture_per_room = 1;
@@ -93,7 +95,7 @@ TEST(LoopClosure, TwoRobotsCrossingOnOneMapCloseALoopAndTheirTrajectoriesAreCorr
              {}};
   for (SimRobot* r : {&a, &b}) {
     client::RobotClientOptions options;
-    options.server_url = rmapd.wsUrl();
+    options.server_url = rmapd->wsUrl();
     options.hello.set_robot_id(r->id);
     options.hello.set_map("shared");
     *options.hello.add_sensors() = r->sim.sensor();
@@ -106,7 +108,7 @@ TEST(LoopClosure, TwoRobotsCrossingOnOneMapCloseALoopAndTheirTrajectoriesAreCorr
     r->client->connect();
   }
   // A viewer of the map (it exists once a robot said Hello).
-  ViewerStream viewer(rmapd.port(), "shared");
+  ViewerStream viewer(rmapd->port(), "shared");
   std::vector<nlohmann::json> pushed;  // loop closures seen on the viewer stream
   std::atomic<bool> watching{true};
   std::thread watcher([&] {
@@ -143,7 +145,7 @@ TEST(LoopClosure, TwoRobotsCrossingOnOneMapCloseALoopAndTheirTrajectoriesAreCorr
               std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
 
   // The loop closures, and at least one between the two robots.
-  client::HttpClient http(rmapd.httpUrl());
+  client::HttpClient http(rmapd->httpUrl());
   nlohmann::json closures;
   for (int attempt = 0; attempt < 50; ++attempt) {  // place recognition runs behind the acks
     closures = getJson(http, "/v1/loop-closures?map=shared").at("loop_closures");
@@ -217,6 +219,26 @@ TEST(LoopClosure, TwoRobotsCrossingOnOneMapCloseALoopAndTheirTrajectoriesAreCorr
     corrected_sum += fixed;
   }
   EXPECT_LT(corrected_sum, live_sum);
+
+  // After kill -9 the stored closures are all there, and the replay of the log, which finds
+  // them again, stores none twice.
+  for (SimRobot* r : {&a, &b}) r->client->close();
+  const nlohmann::json before = getJson(http, "/v1/loop-closures?limit=100000").at("loop_closures");
+  rmapd->kill9();
+  rmapd = std::make_unique<RmapdProcess>(dir.path() / "data");
+  client::HttpClient again(rmapd->httpUrl());
+  const nlohmann::json after = getJson(again, "/v1/loop-closures?limit=100000").at("loop_closures");
+  std::set<std::tuple<std::string, std::string, int64_t, std::string, int64_t>> keys;
+  std::set<int64_t> ids;
+  for (const nlohmann::json& e : after) {
+    ids.insert(e["id"].get<int64_t>());
+    EXPECT_TRUE(keys.emplace(e["source"], e["query"]["robot_id"], e["query"]["stamp_ns"], e["match"]["robot_id"],
+                             e["match"]["stamp_ns"])
+                    .second)
+        << "stored twice: " << e;
+  }
+  for (const nlohmann::json& e : before) EXPECT_TRUE(ids.count(e["id"].get<int64_t>())) << e;
+  std::printf("[ restart ] %zu closures before kill -9, %zu after the replay\n", before.size(), after.size());
 }
 
 TEST(LoopClosure, BadQueriesOfTheEndpointGetJsonErrors) {
