@@ -220,6 +220,50 @@ TEST(LoopClosure, TwoRobotsCrossingOnOneMapCloseALoopAndTheirTrajectoriesAreCorr
   }
   EXPECT_LT(corrected_sum, live_sum);
 
+  // The 3D map's planar row at the laser height agrees with the corrected 2D map: its occupied
+  // cells lie on 2D cells that are not free (no walls left at the poses before a correction).
+  const client::HttpResponse yaml = http.get("/v1/maps/shared/grid2d.yaml");
+  const client::HttpResponse pgm = http.get("/v1/maps/shared/grid2d.pgm");
+  ASSERT_EQ(yaml.status, 200);
+  ASSERT_EQ(pgm.status, 200);
+  double r2 = 0, origin_x = 0, origin_y = 0;
+  ASSERT_EQ(std::sscanf(yaml.body.c_str() + yaml.body.find("resolution: "), "resolution: %lf", &r2), 1);
+  ASSERT_EQ(std::sscanf(yaml.body.c_str() + yaml.body.find("origin: "), "origin: [%lf, %lf", &origin_x, &origin_y), 2);
+  int width = 0, height = 0, maxval = 0, header = 0;
+  ASSERT_EQ(std::sscanf(pgm.body.c_str(), "P5\n%d %d\n%d\n%n", &width, &height, &maxval, &header), 3);
+  const int i0 = static_cast<int>(std::lround(origin_x / r2)), j0 = static_cast<int>(std::lround(origin_y / r2));
+  const auto free2d = [&](int i, int j) {  // map_server: 254 free, 0 occupied, 205 unknown
+    const int col = i - i0, row = height - 1 - (j - j0);
+    if (col < 0 || col >= width || row < 0 || row >= height) return false;
+    return static_cast<uint8_t>(pgm.body[header + row * width + col]) == 254;
+  };
+  char box[200];
+  std::snprintf(box, sizeof box, "/v1/maps/shared/occupancy/box?min=%f,%f,%f&max=%f,%f,%f&limit=100000", origin_x,
+                origin_y, kLaserHeight_m + 0.01, origin_x + width * r2, origin_y + height * r2, kLaserHeight_m + 0.01);
+  const nlohmann::json cuboids = getJson(http, box).at("cuboids");
+  const double r3 = getJson(http, "/v1/maps/shared").at("resolution_m").get<double>();
+  size_t occupied3d = 0, on_free = 0;
+  for (const nlohmann::json& c : cuboids) {
+    if (c["state"] != "occupied") continue;
+    for (double x = c["min"][0].get<double>() + r3 / 2; x < c["max"][0].get<double>(); x += r3) {
+      for (double y = c["min"][1].get<double>() + r3 / 2; y < c["max"][1].get<double>(); y += r3) {
+        ++occupied3d;
+        bool all_free = true;
+        for (double dx : {-r3 / 4, r3 / 4}) {
+          for (double dy : {-r3 / 4, r3 / 4}) {
+            all_free = all_free && free2d(static_cast<int>(std::floor((x + dx) / r2)),
+                                          static_cast<int>(std::floor((y + dy) / r2)));
+          }
+        }
+        on_free += all_free;
+      }
+    }
+  }
+  std::printf("[ 3D row ] %zu occupied cells at the laser height, %zu of them on free 2D cells\n", occupied3d,
+              on_free);
+  EXPECT_GT(occupied3d, 100u);
+  EXPECT_LT(static_cast<double>(on_free), 0.02 * static_cast<double>(occupied3d));
+
   // After kill -9 the stored closures are all there, and the replay of the log, which finds
   // them again, stores none twice.
   for (SimRobot* r : {&a, &b}) r->client->close();
