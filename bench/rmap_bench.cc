@@ -3,6 +3,7 @@
 #include <exception>
 #include <iostream>
 
+#include "loop/loop_bench.h"
 #include "map3d/map3d_bench.h"
 #include "server/server_bench.h"
 #include "slam2d/slam2d_bench.h"
@@ -93,12 +94,31 @@ int main(int argc, char** argv) {
   c->add_option("--lidar-pair", calib.lidar_pair_dir, "folder with source.ply, target.ply, T_target_source.txt ('' skips)");
   c->add_option("--json", calib.json_out, "write results as JSON to this file");
 
+  rmap::bench::LoopBenchOptions loop;
+  CLI::App* l = app.add_subcommand("loop", "place recognition on an image sequence: precision-recall vs ground-truth loops, ms/frame");
+  l->add_option("--images", loop.images_dir, "folder of images in frame order (sorted by name)")->required();
+  l->add_option("--ground-truth", loop.ground_truth, "'query reference' pairs, 0-based, # comments (omit: timing only)");
+  l->add_option("--json", loop.json_out, "write results as JSON to this file");
+  l->add_option("--csv-prefix", loop.csv_prefix, "write P_pr_tol<k>.csv, P_frames.csv and P_pr.png");
+  l->add_option("--descriptor", loop.descriptor, "binary descriptor")->check(CLI::IsMember({"orb", "brisk", "akaze"}));
+  l->add_option("--max-features", loop.max_features, "keypoints per frame at most")->check(CLI::Range(1, 100000));
+  l->add_option("--max-frames", loop.max_frames, "only the first N frames (0: all)");
+  l->add_option("--threads", loop.threads, "OpenCV threads")->check(CLI::Range(1, 64));
+  l->add_option("--resize", [&](const std::vector<std::string>& v) {
+       loop.resize_width = std::stoi(v.at(0));
+       loop.resize_height = std::stoi(v.at(1));
+       return loop.resize_width > 0 && loop.resize_height > 0;
+     }, "resize every frame to W H pixels first")->expected(2);
+  l->add_option("--min-inliers", loop.detector.min_inliers, "acceptance threshold (fundamental-matrix inliers)")
+      ->check(CLI::NonNegativeNumber);
+
   CLI11_PARSE(app, argc, argv);
   try {
     if (m->parsed()) return rmap::bench::runMap3dBench(map3d);
     if (s->parsed()) return rmap::bench::runServerBench(server);
     if (d->parsed()) return rmap::bench::runSlam2dBench(slam2d);
     if (c->parsed()) return rmap::bench::runCalibrationBench(calib);
+    if (l->parsed()) return rmap::bench::runLoopBench(loop);
   } catch (const std::exception& e) {
     std::cerr << "rmap-bench: " << e.what() << std::endl;
     return 1;
