@@ -4,6 +4,7 @@
 #include <iostream>
 
 #include "loop/loop_bench.h"
+#include "loop_sim/loop_sim_bench.h"
 #include "map3d/map3d_bench.h"
 #include "server/server_bench.h"
 #include "slam2d/slam2d_bench.h"
@@ -112,6 +113,51 @@ int main(int argc, char** argv) {
   l->add_option("--min-inliers", loop.detector.min_inliers, "acceptance threshold (fundamental-matrix inliers)")
       ->check(CLI::NonNegativeNumber);
 
+  // Simulated revisit sequences: the options both loop-sim and loop-compare take.
+  auto addSequenceOptions = [](CLI::App* a, rmap::bench::SimSequenceOptions& seq, rmap::loop::PanoramaOptions& pano) {
+    a->add_option("--seed", seq.seed, "simulation seed (course, path, noise)");
+    a->add_option("--laps", seq.revisit.laps, "laps of the loop course")->check(CLI::Range(1, 100));
+    a->add_option("--step", seq.revisit.step_m, "metres between frames")->check(CLI::PositiveNumber);
+    a->add_option("--course-size", [&seq](const std::vector<std::string>& v) {
+         seq.course.size_x_m = std::stod(v.at(0));
+         seq.course.size_y_m = std::stod(v.at(1));
+         return true;
+       }, "loop course footprint X Y, metres")->expected(2);
+    a->add_option("--camera-size", [&seq](const std::vector<std::string>& v) {
+         seq.camera.width_px = std::stoi(v.at(0));
+         seq.camera.height_px = std::stoi(v.at(1));
+         return true;
+       }, "camera image W H, pixels")->expected(2);
+    a->add_option("--lidar-rings", seq.lidar.rings, "simulated lidar rings")->check(CLI::Range(1, 1024));
+    a->add_option("--lidar-columns", seq.lidar.columns, "simulated lidar columns")->check(CLI::Range(1, 16384));
+    a->add_option("--panorama-size", [&pano](const std::vector<std::string>& v) {
+         pano.width_px = std::stoi(v.at(0));
+         pano.height_px = std::stoi(v.at(1));
+         return true;
+       }, "laser panorama W H, pixels")->expected(2);
+  };
+
+  rmap::bench::LoopSimBenchOptions loop_sim;
+  CLI::App* ls = app.add_subcommand("loop-sim", "place recognition on a simulated revisit sequence (camera or laser intensity)");
+  ls->add_option("--modality", loop_sim.modality, "camera or laser")->check(CLI::IsMember({"camera", "laser"}));
+  ls->add_flag("--dark", loop_sim.dark, "revisit laps in the dark (light ~0 + sensor noise; laser unaffected)");
+  ls->add_option("--projection", loop_sim.projection, "laser panorama projection")
+      ->check(CLI::IsMember({"equirectangular", "ring"}));
+  ls->add_option("--descriptor", loop_sim.descriptor, "binary descriptor")->check(CLI::IsMember({"orb", "brisk", "akaze"}));
+  ls->add_option("--threads", loop_sim.threads, "OpenCV threads")->check(CLI::Range(1, 64));
+  ls->add_option("--json", loop_sim.json_out, "write results as JSON to this file");
+  addSequenceOptions(ls, loop_sim.sequence, loop_sim.panorama);
+
+  rmap::bench::LoopCompareOptions compare;
+  compare.lidar_pair_dir = std::string(RMAP_SHARED_DATA_DIR) + "/lidar-intensity/small-gicp-pair";
+  CLI::App* lc = app.add_subcommand("loop-compare",
+                                    "projection models x descriptors on simulated lidar-intensity panoramas, plus a real lidar pair");
+  lc->add_option("--tolerance", compare.tolerance, "frames, for recall at 100 % precision")->check(CLI::NonNegativeNumber);
+  lc->add_option("--lidar-pair", compare.lidar_pair_dir, "folder with source.ply, target.ply, T_target_source.txt ('' skips)");
+  lc->add_option("--threads", compare.threads, "OpenCV threads")->check(CLI::Range(1, 64));
+  lc->add_option("--json", compare.json_out, "write results as JSON to this file");
+  addSequenceOptions(lc, compare.sequence, compare.panorama);
+
   CLI11_PARSE(app, argc, argv);
   try {
     if (m->parsed()) return rmap::bench::runMap3dBench(map3d);
@@ -119,6 +165,8 @@ int main(int argc, char** argv) {
     if (d->parsed()) return rmap::bench::runSlam2dBench(slam2d);
     if (c->parsed()) return rmap::bench::runCalibrationBench(calib);
     if (l->parsed()) return rmap::bench::runLoopBench(loop);
+    if (ls->parsed()) return rmap::bench::runLoopSimBench(loop_sim);
+    if (lc->parsed()) return rmap::bench::runLoopCompareBench(compare);
   } catch (const std::exception& e) {
     std::cerr << "rmap-bench: " << e.what() << std::endl;
     return 1;

@@ -213,9 +213,10 @@ int runLoopSimBench(const LoopSimBenchOptions& options) {
   }
   j.update(score);
 
-  std::printf("loop-sim %s%s%s, %s: %zu frames %dx%d, %zu loop queries, %zu candidates, %zu accepted, %zu words\n",
-              options.modality.c_str(), options.dark ? " (dark revisits)" : "",
-              laser ? (" " + projectionName(panorama.projection)).c_str() : "", options.descriptor.c_str(), seq.size(),
+  const std::string projection = laser ? projectionName(panorama.projection) : std::string("image");
+  std::printf("loop-sim %s%s (%s), %s: %zu frames %dx%d, %zu loop queries, %zu candidates, %zu accepted, %zu words\n",
+              options.modality.c_str(), options.dark ? " dark revisits" : "", projection.c_str(),
+              options.descriptor.c_str(), seq.size(),
               size.width, size.height, seq.truth().size(), run.swept.size(), run.accepted.size(), run.vocabulary_words);
   for (int64_t k : options.tolerances) {
     const std::string key = "tol" + std::to_string(k);
@@ -224,11 +225,9 @@ int runLoopSimBench(const LoopSimBenchOptions& options) {
                 score["auc"][key].get<double>(), 100.0 * score["precision"][key].get<double>(),
                 100.0 * score["recall"][key].get<double>());
   }
-  std::printf("detector ms/frame: mean %.2f p95 %.2f (thread CPU mean %.2f); rendering %.1f ms/frame%s\n",
+  std::printf("detector ms/frame: mean %.2f p95 %.2f (thread CPU mean %.2f); rendering %.1f, projection %.1f ms/frame\n",
               meanOf(run.wall_ms), quantileOf(run.wall_ms, 0.95), meanOf(run.cpu_ms),
-              render_ms / static_cast<double>(seq.size()),
-              laser ? (", projection " + std::to_string(project_ms / static_cast<double>(seq.size())) + " ms/frame").c_str()
-                    : "");
+              render_ms / static_cast<double>(seq.size()), project_ms / static_cast<double>(seq.size()));
   if (!options.json_out.empty()) writeJson(options.json_out, j);
   return 0;
 }
