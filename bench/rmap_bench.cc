@@ -110,8 +110,7 @@ int main(int argc, char** argv) {
        loop.resize_height = std::stoi(v.at(1));
        return loop.resize_width > 0 && loop.resize_height > 0;
      }, "resize every frame to W H pixels first")->expected(2);
-  l->add_option("--min-inliers", loop.detector.min_inliers, "acceptance threshold (fundamental-matrix inliers)")
-      ->check(CLI::NonNegativeNumber);
+  l->add_option("--min-score", loop.detector.min_score, "acceptance threshold on the detector's score (inlier evidence)");
 
   // Simulated revisit sequences: the options both loop-sim and loop-compare take.
   auto addSequenceOptions = [](CLI::App* a, rmap::bench::SimSequenceOptions& seq, rmap::loop::PanoramaOptions& pano) {

@@ -81,8 +81,11 @@ json detectorOptionsJson(const LoopBenchOptions& o) {
           {"island_score_fraction", d.island_score_fraction},
           {"island_gap_frames", d.island_gap_frames},
           {"temporal_consistency_frames", d.temporal_consistency_frames},
+          {"verify_islands", d.verify_islands},
           {"verify_per_island", d.verify_per_island},
-          {"min_inliers", d.min_inliers}};
+          {"inlier_floor", d.inlier_floor},
+          {"evidence_decay", d.evidence_decay},
+          {"min_score", d.min_score}};
 }
 
 }  // namespace
