@@ -125,7 +125,7 @@ std::vector<WordId> LoopDetector::assignWords(const Features& features, const st
   const int n = static_cast<int>(features.keypoints.size());
   const int blocks = descriptorBlocks(extractor_->descriptorBytes());
   std::vector<WordId> words(n, -1);
-  std::vector<bool> reinforced(n, false);
+  std::vector<bool> moved(n, false);  // reinforced, and its descriptor changed
   if (!frames_.empty()) {
     const int track_bits = static_cast<int>(options_.track_distance_fraction * vocabulary_.descriptorBits());
     for (const auto& [i, j] :
@@ -138,17 +138,16 @@ std::vector<WordId> LoopDetector::assignWords(const Features& features, const st
     const uint64_t* p = packed.data() + static_cast<size_t>(i) * blocks;
     if (words[i] < 0) words[i] = vocabulary_.match(p);
     if (words[i] >= 0) {
-      vocabulary_.reinforce(words[i], p);
-      reinforced[i] = true;
+      moved[i] = vocabulary_.reinforce(words[i], p);
     } else {
       words[i] = vocabulary_.add(p);
       created.push_back(words[i]);
     }
   }
-  // Reinforced words moved: one that now lies on another word absorbs it (the one seen more keeps its id).
+  // A reinforced word that moved onto another word absorbs it (the one seen more keeps its id).
   for (int i = 0; i < n; ++i) {
     const WordId w = words[i];
-    if (!reinforced[i] || !vocabulary_.alive(w)) continue;
+    if (!moved[i] || !vocabulary_.alive(w)) continue;
     const WordId other = vocabulary_.mergePartner(w);
     if (other < 0) continue;
     const bool keep_w = vocabulary_.observations(w) >= vocabulary_.observations(other);
