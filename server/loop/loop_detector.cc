@@ -84,6 +84,7 @@ FrameResult LoopDetector::addFeatures(const Features& features) {
   if (candidates.size() > static_cast<size_t>(options_.verify_islands)) candidates.resize(options_.verify_islands);
   if (const std::optional<Island> predicted = predictedIsland(scores, frame)) candidates.push_back(*predicted);
   std::optional<LoopCandidate> best;
+  std::vector<int64_t> verified;
   for (Island& island : candidates) {
     std::sort(island.members.begin(), island.members.end(),
               [](const FrameScore& x, const FrameScore& y) { return x.score > y.score; });
@@ -91,6 +92,8 @@ FrameResult LoopDetector::addFeatures(const Features& features) {
       island.members.resize(options_.verify_per_island);
     }
     for (const FrameScore& m : island.members) {
+      if (std::find(verified.begin(), verified.end(), m.frame) != verified.end()) continue;  // islands may overlap
+      verified.push_back(m.frame);
       const StoredFrame& ref = frames_[m.frame];
       const Verification v =
           verifyGeometry(stored.points, stored.descriptors, ref.points, ref.descriptors, options_.verification);
