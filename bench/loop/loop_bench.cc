@@ -74,6 +74,7 @@ json detectorOptionsJson(const LoopBenchOptions& o) {
           {"merge_distance_fraction", d.vocabulary.merge_distance_fraction},
           {"tree_branching", d.vocabulary.tree.branching},
           {"tree_leaf_size", d.vocabulary.tree.leaf_size},
+          {"tree_count", d.vocabulary.tree.trees},
           {"tree_max_checks", d.vocabulary.tree.max_checks},
           {"track_distance_fraction", d.track_distance_fraction},
           {"purge_after_frames", d.purge_after_frames},

@@ -53,7 +53,8 @@ class IncrementalVocabulary {
   /// A new word holding one packed descriptor.
   WordId add(const uint64_t* descriptor);
   /// Adds a packed descriptor's bits to `word`'s counts and updates its majority descriptor.
-  void reinforce(WordId word, const uint64_t* descriptor);
+  /// @return whether the word's descriptor changed
+  bool reinforce(WordId word, const uint64_t* descriptor);
   /// Moves `gone`'s counts into `keep`; `gone` stops existing.
   void merge(WordId keep, WordId gone);
   void remove(WordId word);
@@ -70,7 +71,7 @@ class IncrementalVocabulary {
 
  private:
   std::vector<uint16_t>& counts(WordId word);  ///< per-bit ones, materialised on the second observation
-  void recomputeDescriptor(WordId word);
+  bool recomputeDescriptor(WordId word);  ///< @return whether a bit changed
 
   int bytes_;
   int blocks_;

@@ -84,6 +84,7 @@ FrameResult LoopDetector::addFeatures(const Features& features) {
   if (candidates.size() > static_cast<size_t>(options_.verify_islands)) candidates.resize(options_.verify_islands);
   if (const std::optional<Island> predicted = predictedIsland(scores, frame)) candidates.push_back(*predicted);
   std::optional<LoopCandidate> best;
+  std::vector<int64_t> verified;
   for (Island& island : candidates) {
     std::sort(island.members.begin(), island.members.end(),
               [](const FrameScore& x, const FrameScore& y) { return x.score > y.score; });
@@ -91,6 +92,8 @@ FrameResult LoopDetector::addFeatures(const Features& features) {
       island.members.resize(options_.verify_per_island);
     }
     for (const FrameScore& m : island.members) {
+      if (std::find(verified.begin(), verified.end(), m.frame) != verified.end()) continue;  // islands may overlap
+      verified.push_back(m.frame);
       const StoredFrame& ref = frames_[m.frame];
       const Verification v =
           verifyGeometry(stored.points, stored.descriptors, ref.points, ref.descriptors, options_.verification);
@@ -125,7 +128,7 @@ std::vector<WordId> LoopDetector::assignWords(const Features& features, const st
   const int n = static_cast<int>(features.keypoints.size());
   const int blocks = descriptorBlocks(extractor_->descriptorBytes());
   std::vector<WordId> words(n, -1);
-  std::vector<bool> reinforced(n, false);
+  std::vector<bool> moved(n, false);  // reinforced, and its descriptor changed
   if (!frames_.empty()) {
     const int track_bits = static_cast<int>(options_.track_distance_fraction * vocabulary_.descriptorBits());
     for (const auto& [i, j] :
@@ -138,17 +141,16 @@ std::vector<WordId> LoopDetector::assignWords(const Features& features, const st
     const uint64_t* p = packed.data() + static_cast<size_t>(i) * blocks;
     if (words[i] < 0) words[i] = vocabulary_.match(p);
     if (words[i] >= 0) {
-      vocabulary_.reinforce(words[i], p);
-      reinforced[i] = true;
+      moved[i] = vocabulary_.reinforce(words[i], p);
     } else {
       words[i] = vocabulary_.add(p);
       created.push_back(words[i]);
     }
   }
-  // Reinforced words moved: one that now lies on another word absorbs it (the one seen more keeps its id).
+  // A reinforced word that moved onto another word absorbs it (the one seen more keeps its id).
   for (int i = 0; i < n; ++i) {
     const WordId w = words[i];
-    if (!reinforced[i] || !vocabulary_.alive(w)) continue;
+    if (!moved[i] || !vocabulary_.alive(w)) continue;
     const WordId other = vocabulary_.mergePartner(w);
     if (other < 0) continue;
     const bool keep_w = vocabulary_.observations(w) >= vocabulary_.observations(other);
