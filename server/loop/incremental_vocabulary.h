@@ -15,7 +15,8 @@
 /// Nearest-word search goes through a WordTree (approximate, cost flat in
 /// the vocabulary size). Word ids are stable; removed or merged-away ids are
 /// not reused. Memory: descriptor bytes per word, plus 2 bytes per bit for
-/// words seen more than once.
+/// words seen more than once. Not thread-safe, searches included (the tree
+/// keeps scratch marks).
 
 #include <cstdint>
 #include <vector>
