@@ -68,7 +68,6 @@ class IncrementalVocabulary {
   size_t size() const { return live_; }
   /// Ids handed out so far (live or not): valid ids are [0, capacity()).
   size_t capacity() const { return observations_.size(); }
-  const WordTree& tree() const { return tree_; }
 
  private:
   std::vector<uint16_t>& counts(WordId word);  ///< per-bit ones, materialised on the second observation
