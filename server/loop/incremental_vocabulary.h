@@ -15,7 +15,8 @@
 /// Nearest-word search goes through a WordTree (approximate, cost flat in
 /// the vocabulary size). Word ids are stable; removed or merged-away ids are
 /// not reused. Memory: descriptor bytes per word, plus 2 bytes per bit for
-/// words seen more than once.
+/// words seen more than once. Not thread-safe, searches included (the tree
+/// keeps scratch marks).
 
 #include <cstdint>
 #include <vector>
@@ -67,7 +68,6 @@ class IncrementalVocabulary {
   size_t size() const { return live_; }
   /// Ids handed out so far (live or not): valid ids are [0, capacity()).
   size_t capacity() const { return observations_.size(); }
-  const WordTree& tree() const { return tree_; }
 
  private:
   std::vector<uint16_t>& counts(WordId word);  ///< per-bit ones, materialised on the second observation
