@@ -12,6 +12,8 @@ void CameraModel::validate() const {
   if (width_px < 8 || width_px > 8192 || height_px < 8 || height_px > 8192) fail("width_px, height_px must be in [8, 8192]");
   if (!(hfov_rad > 0.0 && hfov_rad <= 3.0)) fail("hfov_rad must be in (0, 3]");
   if (!(max_range_m > 0.0) || !std::isfinite(max_range_m)) fail("max_range_m must be finite and > 0");
+  if (!(target_mean_grey > 0.0 && target_mean_grey < 255.0)) fail("target_mean_grey must be in (0, 255)");
+  if (!(max_auto_gain >= 1.0) || !std::isfinite(max_auto_gain)) fail("max_auto_gain must be finite and ≥ 1");
 }
 
 void Lighting::validate() const {
@@ -32,21 +34,31 @@ GreyImage renderCamera(const VoxelWorld& world, const Eigen::Isometry3d& camera_
   const Eigen::Vector3d origin = camera_pose_world.translation();
   const Eigen::Matrix3d rotation = camera_pose_world.linear();
   const Eigen::Vector3d light = lighting.light_direction.normalized();
-  const double scale = 255.0 * lighting.gain * lighting.light_level;
+  const double scale = 255.0 * lighting.light_level;
   std::normal_distribution<double> noise(0.0, 1.0);
 
-  GreyImage image{model.width_px, model.height_px, std::vector<uint8_t>(static_cast<size_t>(model.width_px) * model.height_px)};
+  std::vector<double> signal(static_cast<size_t>(model.width_px) * model.height_px, 0.0);
   for (int v = 0; v < model.height_px; ++v) {
     for (int u = 0; u < model.width_px; ++u) {
       const Eigen::Vector3d dir = (rotation * Eigen::Vector3d(f, cx - u - 0.5, cy - v - 0.5)).normalized();
-      double g = 0.0;
       if (const std::optional<RayHit> hit = world.castRay(origin, dir, model.max_range_m)) {
         const double lit = lighting.ambient + (1.0 - lighting.ambient) * std::max(0.0, -hit->normal.dot(light));
-        g = scale * hit->reflectivity * lit;
+        signal[static_cast<size_t>(v) * model.width_px + u] = scale * hit->reflectivity * lit;
       }
-      if (lighting.noise_sigma > 0.0) g += lighting.noise_sigma * noise(rng);
-      image.pixels[static_cast<size_t>(v) * model.width_px + u] = static_cast<uint8_t>(std::clamp(std::lround(g), 0L, 255L));
     }
+  }
+  double gain = lighting.gain;
+  if (model.auto_exposure) {
+    double mean = 0.0;
+    for (double s : signal) mean += s;
+    mean /= static_cast<double>(signal.size());
+    const double wanted = mean > 0.0 ? model.target_mean_grey / (gain * mean) : model.max_auto_gain;
+    gain *= std::clamp(wanted, 1.0 / model.max_auto_gain, model.max_auto_gain);
+  }
+  GreyImage image{model.width_px, model.height_px, std::vector<uint8_t>(signal.size())};
+  for (size_t k = 0; k < signal.size(); ++k) {
+    const double read = lighting.noise_sigma > 0.0 ? lighting.noise_sigma * noise(rng) : 0.0;
+    image.pixels[k] = static_cast<uint8_t>(std::clamp(std::lround(gain * (signal[k] + read)), 0L, 255L));
   }
   return image;
 }

@@ -8,12 +8,17 @@
 /// (u, v), u to the right and v down, looks along (f, cx − u − ½, cy − v − ½)
 /// with f = (width/2) / tan(hfov/2), cx = width/2, cy = height/2 (square pixels).
 ///
-/// Radiometry (Lambertian, no shadows): the grey value of a surface of
-/// reflectivity ρ and face normal n is
-///   g = clamp(255 · gain · ρ · light_level · (ambient + (1 − ambient) · max(0, −n·l)) + σ·N(0, 1), 0, 255)
-/// with l the unit direction the light travels; rays that hit nothing within
-/// max_range_m see black (plus noise). Voxel faces are axis-aligned, so walls
-/// are flat shaded; texture comes from the reflectivity pattern of the world.
+/// Radiometry (Lambertian, no shadows): a surface of reflectivity ρ and face
+/// normal n gives the signal s = 255 · ρ · light_level · (ambient + (1 − ambient) · max(0, −n·l))
+/// (l the unit direction the light travels; rays that hit nothing within
+/// max_range_m give 0), and the grey value is
+///   g = clamp(k · (s + σ·N(0, 1)), 0, 255)
+/// with σ the read noise (amplified with the gain, as in a real sensor) and
+/// k = lighting.gain, times, with auto exposure, the factor that brings the
+/// mean signal to target_mean_grey, limited to [1/max_auto_gain, max_auto_gain]:
+/// a camera that adapts to dim light until its gain runs out, so in the dark
+/// it shows amplified noise. Voxel faces are axis-aligned, so walls are flat
+/// shaded; texture comes from the reflectivity pattern of the world.
 
 #include <Eigen/Geometry>
 #include <cstdint>
@@ -29,6 +34,9 @@ struct CameraModel {
   int height_px = 240;         ///< [8, 8192]
   double hfov_rad = 1.2217;    ///< horizontal field of view (70°), (0, 3]
   double max_range_m = 50.0;   ///< metres, > 0
+  bool auto_exposure = true;
+  double target_mean_grey = 100.0;  ///< auto exposure aims at this mean, (0, 255)
+  double max_auto_gain = 16.0;      ///< ≥ 1
 
   /// @throws std::invalid_argument naming the first bad parameter
   void validate() const;

@@ -40,7 +40,7 @@ std::vector<RevisitFrame> planRevisits(const std::vector<Eigen::Vector2d>& path_
 
 struct LoopTruthOptions {
   double max_distance_m = 1.0;   ///< horizontal distance of the same place, metres, > 0
-  double max_heading_rad = 0.35; ///< heading difference of the same view, rad, > 0
+  double max_heading_rad = 0.8;  ///< heading difference of the same view (46°: a 70° camera view still shares a third), rad, > 0
   double min_travel_m = 10.0;    ///< driven between the two frames at least (not just the next frame), metres, ≥ 0
 
   /// @throws std::invalid_argument naming the first bad parameter

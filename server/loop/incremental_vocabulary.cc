@@ -1,5 +1,6 @@
 #include "loop/incremental_vocabulary.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -61,9 +62,10 @@ std::vector<uint16_t>& IncrementalVocabulary::counts(WordId word) {
   return c;
 }
 
-void IncrementalVocabulary::recomputeDescriptor(WordId word) {
+bool IncrementalVocabulary::recomputeDescriptor(WordId word) {
   const std::vector<uint16_t>& c = ones_[word];
   uint64_t* d = descriptors_.data() + static_cast<size_t>(word) * blocks_;
+  const std::vector<uint64_t> before(d, d + blocks_);
   const int n = observations_[word];
   for (int b = 0; b < descriptorBits(); ++b) {
     const int twice = 2 * c[b];
@@ -77,14 +79,15 @@ void IncrementalVocabulary::recomputeDescriptor(WordId word) {
     for (uint16_t& v : cm) v = static_cast<uint16_t>((v + 1) / 2);
     observations_[word] = (n + 1) / 2;
   }
+  return !std::equal(before.begin(), before.end(), d);
 }
 
-void IncrementalVocabulary::reinforce(WordId word, const uint64_t* d) {
+bool IncrementalVocabulary::reinforce(WordId word, const uint64_t* d) {
   if (!alive(word)) throw std::invalid_argument("IncrementalVocabulary::reinforce: no word " + std::to_string(word));
   std::vector<uint16_t>& c = counts(word);
   for (int b = 0; b < descriptorBits(); ++b) c[b] = static_cast<uint16_t>(c[b] + (testBit(d, b) ? 1 : 0));
   ++observations_[word];
-  recomputeDescriptor(word);
+  return recomputeDescriptor(word);
 }
 
 void IncrementalVocabulary::merge(WordId keep, WordId gone) {

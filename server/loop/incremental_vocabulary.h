@@ -15,7 +15,8 @@
 /// Nearest-word search goes through a WordTree (approximate, cost flat in
 /// the vocabulary size). Word ids are stable; removed or merged-away ids are
 /// not reused. Memory: descriptor bytes per word, plus 2 bytes per bit for
-/// words seen more than once.
+/// words seen more than once. Not thread-safe, searches included (the tree
+/// keeps scratch marks).
 
 #include <cstdint>
 #include <vector>
@@ -53,7 +54,8 @@ class IncrementalVocabulary {
   /// A new word holding one packed descriptor.
   WordId add(const uint64_t* descriptor);
   /// Adds a packed descriptor's bits to `word`'s counts and updates its majority descriptor.
-  void reinforce(WordId word, const uint64_t* descriptor);
+  /// @return whether the word's descriptor changed
+  bool reinforce(WordId word, const uint64_t* descriptor);
   /// Moves `gone`'s counts into `keep`; `gone` stops existing.
   void merge(WordId keep, WordId gone);
   void remove(WordId word);
@@ -66,11 +68,10 @@ class IncrementalVocabulary {
   size_t size() const { return live_; }
   /// Ids handed out so far (live or not): valid ids are [0, capacity()).
   size_t capacity() const { return observations_.size(); }
-  const WordTree& tree() const { return tree_; }
 
  private:
   std::vector<uint16_t>& counts(WordId word);  ///< per-bit ones, materialised on the second observation
-  void recomputeDescriptor(WordId word);
+  bool recomputeDescriptor(WordId word);  ///< @return whether a bit changed
 
   int bytes_;
   int blocks_;

@@ -24,8 +24,11 @@ void LoopDetectorOptions::validate() const {
   require(island_score_fraction > 0.0 && island_score_fraction <= 1.0, "island_score_fraction must be in (0, 1]");
   require(island_gap_frames >= 1, "island_gap_frames must be >= 1");
   require(temporal_consistency_frames >= 1, "temporal_consistency_frames must be >= 1");
+  require(verify_islands >= 1, "verify_islands must be >= 1");
   require(verify_per_island >= 1, "verify_per_island must be >= 1");
-  require(std::isfinite(min_inliers) && min_inliers >= 0.0, "min_inliers must be finite and >= 0");
+  require(std::isfinite(inlier_floor) && inlier_floor >= 0.0, "inlier_floor must be finite and >= 0");
+  require(evidence_decay >= 0.0 && evidence_decay < 1.0, "evidence_decay must be in [0, 1)");
+  require(std::isfinite(min_score), "min_score must be finite");
 }
 
 namespace {
@@ -69,40 +72,54 @@ FrameResult LoopDetector::addFeatures(const Features& features) {
 
   const auto frame = static_cast<int64_t>(frames_.size());
   std::vector<WordId> words = assignWords(features, packed);
-  const std::optional<Island> island = bestIsland(words, frame);
+  const std::vector<FrameScore> scores = index_.score(words, frame - options_.exclusion_window_frames);
 
   StoredFrame stored;
   stored.points.reserve(n);
   for (const cv::KeyPoint& k : features.keypoints) stored.points.push_back(k.pt);
   stored.descriptors = n > 0 ? d.clone() : cv::Mat(0, extractor_->descriptorBytes(), CV_8U);
 
-  FrameResult result;
-  result.frame = frame;
-  if (island && temporallyConsistent(island)) {
-    std::vector<FrameScore> members = island->members;
-    std::sort(members.begin(), members.end(), [](const FrameScore& a, const FrameScore& b) { return a.score > b.score; });
-    members.resize(std::min<size_t>(members.size(), options_.verify_per_island));
-    LoopCandidate best;
-    for (const FrameScore& m : members) {
+  // Verify the best frames of the top islands, and of the island the previous frame's loop predicts.
+  std::vector<Island> candidates = islands(scores);
+  if (candidates.size() > static_cast<size_t>(options_.verify_islands)) candidates.resize(options_.verify_islands);
+  if (const std::optional<Island> predicted = predictedIsland(scores, frame)) candidates.push_back(*predicted);
+  std::optional<LoopCandidate> best;
+  std::vector<int64_t> verified;
+  for (Island& island : candidates) {
+    std::sort(island.members.begin(), island.members.end(),
+              [](const FrameScore& x, const FrameScore& y) { return x.score > y.score; });
+    if (island.members.size() > static_cast<size_t>(options_.verify_per_island)) {
+      island.members.resize(options_.verify_per_island);
+    }
+    for (const FrameScore& m : island.members) {
+      if (std::find(verified.begin(), verified.end(), m.frame) != verified.end()) continue;  // islands may overlap
+      verified.push_back(m.frame);
       const StoredFrame& ref = frames_[m.frame];
       const Verification v =
           verifyGeometry(stored.points, stored.descriptors, ref.points, ref.descriptors, options_.verification);
-      if (best.reference_frame < 0 || v.inliers > best.inliers) {
-        best.query_frame = frame;
-        best.reference_frame = m.frame;
-        best.inliers = v.inliers;
-        best.score = v.inliers;
-      }
+      if (!best || v.inliers > best->inliers) best = LoopCandidate{frame, m.frame, 0.0, v.inliers, v.matches, m.score};
     }
+  }
+  if (best) {
+    best->score = best->inliers - options_.inlier_floor;
+    const std::optional<LoopCandidate>& previous = recent_.empty() ? std::nullopt : recent_.back();
+    if (best->score > 0.0 && previous && continues(*previous, best->reference_frame)) {
+      best->score += options_.evidence_decay * std::max(0.0, previous->score);
+    }
+  }
+
+  FrameResult result;
+  result.frame = frame;
+  if (best && temporallyConsistent(best->reference_frame)) {
     result.best = best;
-    result.accepted = best.score >= options_.min_inliers;
+    result.accepted = best->score >= options_.min_score;
   }
 
   index_.addFrame(words);
   frames_.push_back(std::move(stored));
   previous_words_ = std::move(words);
-  recent_islands_.push_back(island);
-  while (static_cast<int>(recent_islands_.size()) > options_.temporal_consistency_frames) recent_islands_.pop_front();
+  recent_.push_back(best);
+  while (recent_.size() > static_cast<size_t>(std::max(1, options_.temporal_consistency_frames - 1))) recent_.pop_front();
   purge(frame);
   return result;
 }
@@ -111,7 +128,7 @@ std::vector<WordId> LoopDetector::assignWords(const Features& features, const st
   const int n = static_cast<int>(features.keypoints.size());
   const int blocks = descriptorBlocks(extractor_->descriptorBytes());
   std::vector<WordId> words(n, -1);
-  std::vector<bool> reinforced(n, false);
+  std::vector<bool> moved(n, false);  // reinforced, and its descriptor changed
   if (!frames_.empty()) {
     const int track_bits = static_cast<int>(options_.track_distance_fraction * vocabulary_.descriptorBits());
     for (const auto& [i, j] :
@@ -124,17 +141,16 @@ std::vector<WordId> LoopDetector::assignWords(const Features& features, const st
     const uint64_t* p = packed.data() + static_cast<size_t>(i) * blocks;
     if (words[i] < 0) words[i] = vocabulary_.match(p);
     if (words[i] >= 0) {
-      vocabulary_.reinforce(words[i], p);
-      reinforced[i] = true;
+      moved[i] = vocabulary_.reinforce(words[i], p);
     } else {
       words[i] = vocabulary_.add(p);
       created.push_back(words[i]);
     }
   }
-  // Reinforced words moved: one that now lies on another word absorbs it (the one seen more keeps its id).
+  // A reinforced word that moved onto another word absorbs it (the one seen more keeps its id).
   for (int i = 0; i < n; ++i) {
     const WordId w = words[i];
-    if (!reinforced[i] || !vocabulary_.alive(w)) continue;
+    if (!moved[i] || !vocabulary_.alive(w)) continue;
     const WordId other = vocabulary_.mergePartner(w);
     if (other < 0) continue;
     const bool keep_w = vocabulary_.observations(w) >= vocabulary_.observations(other);
@@ -147,41 +163,61 @@ std::vector<WordId> LoopDetector::assignWords(const Features& features, const st
   return words;
 }
 
-std::optional<LoopDetector::Island> LoopDetector::bestIsland(const std::vector<WordId>& words, int64_t frame) const {
-  std::vector<FrameScore> scores = index_.score(words, frame - options_.exclusion_window_frames);
+std::vector<LoopDetector::Island> LoopDetector::islands(std::vector<FrameScore> scores) const {
   double top = 0.0;
   for (const FrameScore& s : scores) top = std::max(top, s.score);
-  if (top < options_.min_similarity || top <= 0.0) return std::nullopt;
+  std::vector<Island> out;
+  if (top < options_.min_similarity || top <= 0.0) return out;
   const double floor = std::max(options_.min_similarity, options_.island_score_fraction * top);
   std::erase_if(scores, [&](const FrameScore& s) { return s.score < floor; });
   std::sort(scores.begin(), scores.end(), [](const FrameScore& a, const FrameScore& b) { return a.frame < b.frame; });
-  std::optional<Island> best;
-  Island current;
-  auto close = [&] {
-    if (!current.members.empty() && (!best || current.score > best->score)) best = current;
-    current = Island{};
-  };
   for (const FrameScore& s : scores) {
-    if (!current.members.empty() && s.frame - current.last >= options_.island_gap_frames) close();
-    if (current.members.empty()) current.first = s.frame;
-    current.last = s.frame;
-    current.score += s.score;
-    current.members.push_back(s);
+    if (out.empty() || s.frame - out.back().last >= options_.island_gap_frames) {
+      out.emplace_back();
+      out.back().first = s.frame;
+    }
+    Island& island = out.back();
+    island.last = s.frame;
+    island.score += s.score;
+    island.members.push_back(s);
   }
-  close();
-  return best;
+  std::sort(out.begin(), out.end(), [](const Island& a, const Island& b) { return a.score > b.score; });
+  return out;
 }
 
-bool LoopDetector::temporallyConsistent(const std::optional<Island>& island) const {
-  const int needed = options_.temporal_consistency_frames - 1;
-  if (static_cast<int>(recent_islands_.size()) < needed) return false;
-  const std::optional<Island>* later = &island;
-  for (int k = 0; k < needed; ++k) {
-    const std::optional<Island>& earlier = recent_islands_[recent_islands_.size() - 1 - k];
-    if (!earlier) return false;
-    const int64_t gap = options_.island_gap_frames;
-    if (earlier->last + gap < (*later)->first || (*later)->last + gap < earlier->first) return false;
-    later = &earlier;
+std::optional<LoopDetector::Island> LoopDetector::predictedIsland(const std::vector<FrameScore>& scores,
+                                                                  int64_t frame) const {
+  if (recent_.empty() || !recent_.back() || recent_.back()->score < options_.min_score) return std::nullopt;
+  // The previous frame closed a loop on r: this one most likely closes on the frames around r + 1.
+  const int64_t r = recent_.back()->reference_frame + 1;
+  const int64_t first = std::max<int64_t>(0, r - options_.island_gap_frames);
+  const int64_t last = std::min<int64_t>(r + options_.island_gap_frames, frame - options_.exclusion_window_frames - 1);
+  if (last < first) return std::nullopt;
+  Island island;
+  island.first = first;
+  island.last = last;
+  for (const FrameScore& s : scores) {
+    if (s.frame >= first && s.frame <= last) {
+      island.members.push_back(s);
+      island.score += s.score;
+    }
+  }
+  if (island.members.empty()) island.members.push_back({std::clamp(r, first, last), 0.0});
+  return island;
+}
+
+bool LoopDetector::continues(const LoopCandidate& earlier, int64_t reference) const {
+  return earlier.inliers > 0 && std::abs(earlier.reference_frame - reference) <= options_.island_gap_frames;
+}
+
+bool LoopDetector::temporallyConsistent(int64_t reference) const {
+  const size_t needed = static_cast<size_t>(options_.temporal_consistency_frames - 1);
+  if (recent_.size() < needed) return false;
+  int64_t later = reference;
+  for (size_t k = 0; k < needed; ++k) {
+    const std::optional<LoopCandidate>& earlier = recent_[recent_.size() - 1 - k];
+    if (!earlier || !continues(*earlier, later)) return false;
+    later = earlier->reference_frame;
   }
   return true;
 }

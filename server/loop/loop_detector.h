@@ -14,19 +14,33 @@
 ///     distance or become new words. Reinforced words that drift onto another
 ///     word are merged with it. Words seen in a single frame are removed
 ///     purge_after_frames later (unstable detections; 0 keeps them).
-///  3. Scores s(q, f) (InvertedIndex) of the frames older than the
-///     exclusion window (recent frames look alike without being loops).
+///  3. Similarity s(q, f) (InvertedIndex, tf-idf) to the frames older than
+///     the exclusion window (recent frames look alike without being loops).
 ///  4. Islands: frames scoring ≥ island_score_fraction of the best, grouped
 ///     when fewer than island_gap_frames apart; an island scores the sum of
-///     its frames' scores. The best island must overlap (within
-///     island_gap_frames) the best islands of the previous
-///     temporal_consistency_frames − 1 frames.
-///  5. Geometric verification (fundamental-matrix RANSAC) of the island's
-///     verify_per_island highest-scoring frames; the one with most inliers
-///     is the candidate. Its score is the inlier count; the loop is accepted
-///     when score ≥ min_inliers.
+///     its frames' similarities.
+///  5. Geometric verification (fundamental-matrix RANSAC) of the
+///     verify_per_island most similar frames of the verify_islands best
+///     islands, and of the island around r + 1 when the previous frame closed
+///     a loop on r (the loop continues). The frame with most inliers is the
+///     candidate.
+///  6. Temporal consistency, as accumulated evidence: a candidate brings
+///     e = inliers − inlier_floor (the inliers a wrong place reaches), and
+///     when e > 0 and its reference continues the previous frame's (within
+///     island_gap_frames) it also inherits evidence_decay × the previous
+///     score: score = e + evidence_decay · max(0, previous score). A loop
+///     seen over consecutive frames grows surer; an isolated match must
+///     stand on its own; a frame whose match is no better than a wrong
+///     place's is never carried by its predecessors. With
+///     temporal_consistency_frames = n > 1, a candidate is also reported
+///     only when the n − 1 previous frames' candidates chain to it.
+///     The loop is accepted when score ≥ min_score.
 /// Memory per frame: keypoint positions and descriptors (≈ (8 + descriptor
-/// bytes) × features), plus the vocabulary.
+/// bytes) × features, 20 KB for 500 ORB features), plus the vocabulary
+/// (≈ 50 words per frame kept on Lip6). Windows are in frames: feed frames
+/// at a steady pace of motion (a robot standing still for longer than the
+/// exclusion window would close loops on itself). Thread-compatible, not
+/// thread-safe.
 
 #include <cstdint>
 #include <deque>
@@ -46,14 +60,17 @@ struct LoopDetectorOptions {
   GeometricVerificationOptions verification;
   double track_distance_fraction = 0.2;  ///< tracked descriptor pairs within this fraction of the bits ...
   double track_ratio = 0.8;              ///< ... and below this nearest / second-nearest ratio
-  int purge_after_frames = 0;            ///< words seen in one frame only are dropped this many frames later (0: never)
+  int purge_after_frames = 2;            ///< words seen in one frame only are dropped this many frames later (0: never)
   int exclusion_window_frames = 50;      ///< the most recent frames are not loop candidates
-  double min_similarity = 0.02;          ///< frames scoring below this are not candidates
+  double min_similarity = 0.0;           ///< frames less similar than this are not candidates
   double island_score_fraction = 0.5;    ///< candidates score at least this fraction of the best frame
   int island_gap_frames = 5;             ///< candidates this close (frame indices) form one island
-  int temporal_consistency_frames = 2;   ///< consecutive frames whose best islands must agree (1: no check)
-  int verify_per_island = 3;             ///< highest-scoring frames of the island verified geometrically
-  double min_inliers = 20;               ///< acceptance threshold on the score (fundamental-matrix inliers)
+  int temporal_consistency_frames = 1;   ///< consecutive frames whose candidates must chain (1: evidence only)
+  int verify_islands = 2;                ///< highest-scoring islands verified geometrically ...
+  int verify_per_island = 2;             ///< ... through their most similar frames
+  double inlier_floor = 10.0;            ///< inliers that bring no evidence (what wrong places reach)
+  double evidence_decay = 0.75;          ///< share of the previous frame's score a continuing loop inherits, [0, 1)
+  double min_score = 10.0;               ///< acceptance threshold on the score
   /// @throws std::invalid_argument naming the first bad field
   void validate() const;
 };
@@ -61,8 +78,10 @@ struct LoopDetectorOptions {
 struct LoopCandidate {
   int64_t query_frame = -1;      ///< 0-based index of the frame just added
   int64_t reference_frame = -1;  ///< 0-based index of the older frame it matches
-  double score = 0.0;            ///< the acceptance score swept for precision–recall curves (higher = surer)
+  double score = 0.0;            ///< the acceptance score swept for precision–recall curves (higher = surer; see step 6)
   int inliers = 0;               ///< geometric verification inliers
+  int matches = 0;               ///< putative descriptor matches the inliers were drawn from
+  double similarity = 0.0;       ///< tf-idf similarity of the two frames (InvertedIndex), 0..1
 };
 
 struct FrameResult {
@@ -103,8 +122,14 @@ class LoopDetector {
   };
 
   std::vector<WordId> assignWords(const Features& features, const std::vector<uint64_t>& packed);
-  std::optional<Island> bestIsland(const std::vector<WordId>& words, int64_t frame) const;
-  bool temporallyConsistent(const std::optional<Island>& island) const;
+  /// Islands of the frames scoring near the best, highest island score first.
+  std::vector<Island> islands(std::vector<FrameScore> scores) const;
+  /// The frames around the previous frame's accepted reference + 1, if it had one.
+  std::optional<Island> predictedIsland(const std::vector<FrameScore>& scores, int64_t frame) const;
+  /// Whether `reference` continues the loop of an earlier frame's candidate.
+  bool continues(const LoopCandidate& earlier, int64_t reference) const;
+  /// Whether the previous temporal_consistency_frames − 1 frames had candidates chaining to `reference`.
+  bool temporallyConsistent(int64_t reference) const;
   void purge(int64_t frame);
 
   LoopDetectorOptions options_;
@@ -113,7 +138,7 @@ class LoopDetector {
   InvertedIndex index_;
   std::vector<StoredFrame> frames_;
   std::vector<WordId> previous_words_;  ///< word of each feature of the previous frame
-  std::deque<std::optional<Island>> recent_islands_;  ///< best islands of the last frames, newest last
+  std::deque<std::optional<LoopCandidate>> recent_;  ///< best candidates of the last frames, newest last
   std::deque<std::pair<int64_t, std::vector<WordId>>> new_words_;  ///< words created per frame, awaiting purge
 };
 

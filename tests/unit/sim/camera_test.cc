@@ -27,11 +27,17 @@ Lighting noiseless(double level) {
   return l;
 }
 
-TEST(Camera, RendersReflectivityTimesLight) {
-  std::mt19937_64 rng(1);
+CameraModel fixedExposure() {
   CameraModel m;
   m.width_px = 64;
   m.height_px = 48;
+  m.auto_exposure = false;
+  return m;
+}
+
+TEST(Camera, RendersReflectivityTimesLight) {
+  std::mt19937_64 rng(1);
+  const CameraModel m = fixedExposure();
   const GreyImage img = renderCamera(room(), at(0, 0, 2), m, noiseless(1.0), rng);
   ASSERT_EQ(img.width, 64);
   ASSERT_EQ(img.pixels.size(), 64u * 48u);
@@ -45,11 +51,30 @@ TEST(Camera, RendersReflectivityTimesLight) {
   EXPECT_EQ(img.at(32, 47), std::lround(255 * 0.5 * 0.4));
 }
 
+TEST(Camera, AutoExposureEvensOutTheLightLevelUntilTheGainRunsOut) {
+  std::mt19937_64 rng(3);
+  CameraModel m = fixedExposure();
+  m.auto_exposure = true;
+  m.target_mean_grey = 100.0;
+  const GreyImage day = renderCamera(room(), at(0, 0, 2), m, noiseless(1.0), rng);
+  const GreyImage dusk = renderCamera(room(), at(0, 0, 2), m, noiseless(0.25), rng);
+  auto mean = [](const GreyImage& g) {
+    double s = 0.0;
+    for (uint8_t p : g.pixels) s += p;
+    return s / g.pixels.size();
+  };
+  EXPECT_NEAR(mean(day), 100.0, 2.0);
+  EXPECT_NEAR(mean(dusk), 100.0, 2.0);
+  EXPECT_NEAR(dusk.at(16, 24), day.at(16, 24), 1);
+  // At 1 % light the gain stops at max_auto_gain (16).
+  const double fixed_day = mean(renderCamera(room(), at(0, 0, 2), fixedExposure(), noiseless(1.0), rng));
+  const GreyImage night = renderCamera(room(), at(0, 0, 2), m, noiseless(0.01), rng);
+  EXPECT_NEAR(mean(night), 0.01 * m.max_auto_gain * fixed_day, 1.0);
+}
+
 TEST(Camera, DarkLeavesOnlyNoise) {
   std::mt19937_64 rng(2);
-  CameraModel m;
-  m.width_px = 64;
-  m.height_px = 48;
+  const CameraModel m = fixedExposure();
   Lighting dark = noiseless(0.0);
   dark.noise_sigma = 3.0;
   const GreyImage img = renderCamera(room(), at(0, 0, 2), m, dark, rng);

@@ -51,8 +51,9 @@ TEST(Revisit, TruthPairsAreSamePlaceSameHeadingNextLap) {
   std::vector<bool> has_pair(frames.size(), false);
   for (const auto& [q, r] : pairs) {
     ASSERT_GT(q, r);
-    // A whole number of laps apart (the end of a lap meets the start of the next).
-    EXPECT_LE(std::abs(std::remainder(frames[q].travel_m - frames[r].travel_m, lap_m)), 1.0);
+    // A whole number of laps apart (the end of a lap meets the start of the next),
+    // give or take the 1 m distance (a little more along an arc).
+    EXPECT_LE(std::abs(std::remainder(frames[q].travel_m - frames[r].travel_m, lap_m)), 1.2);
     EXPECT_GE(frames[q].travel_m - frames[r].travel_m, 10.0);
     EXPECT_LE((frames[q].pose_world.translation() - frames[r].pose_world.translation()).norm(), 1.0);
     has_pair[q] = true;
