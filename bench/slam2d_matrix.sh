@@ -7,6 +7,10 @@
 # table for docs/BENCHMARKS.md (also written to out/bench/slam2d/table.md).
 # Needs a Release build of rmap-bench and jq. Extra arguments go to every run
 # (engine options such as --resolution 0.1; not --odometry, which the runs set).
+# Every run with odometry is repeated with --loop-closure on ("-loop-closure"
+# rows; LOOP_CLOSURE=0 skips them): its closures are judged against the
+# corrected log of the same run where one exists (--closure-reference), else
+# against the reference poses.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bench=build/bin/rmap-bench
@@ -30,6 +34,16 @@ run() {  # run NAME ARGS...: one benchmark run, output kept; a failing run is re
 }
 
 extra=("$@")
+loop_closure=${LOOP_CLOSURE:-1}
+run_lc() {  # run_lc NAME ARGS...: the same run with loop closure
+  local name=$1
+  shift
+  [ "$loop_closure" = 1 ] && run "$name-loop-closure" "$@" --loop-closure on
+  return 0
+}
+# The corrected log of each raw log (same scans, found by their ranges): judges the raw runs' closures.
+declare -A corrected_of=([intel]=intel-corrected.log.gz [fr079]=freiburg-079-corrected.log.gz
+                         [mit-csail]=csail-corrected.log.gz)
 for log in "$data"/carmen-2d-raw/*.clf*; do
   [ -e "$log" ] || continue
   name=$(basename "$log")
@@ -40,6 +54,11 @@ for log in "$data"/carmen-2d-raw/*.clf*; do
     run "raw-$name-no-odometry" "${args[@]}" --odometry none  # scan matching alone
   fi
   run "raw-$name" "${args[@]}" --odometry logged  # raw logs: the logged poses are raw odometry
+  judge=()
+  corrected=${corrected_of[$name]:-}
+  [ -n "$corrected" ] && [ -f "$data/carmen-2d/$corrected" ] && judge=(--closure-reference "$data/carmen-2d/$corrected")
+  run_lc "raw-$name" "${args[@]}" --odometry logged "${judge[@]}" --map-image "$out/raw-$name-loop-closure.png" \
+    --map-image-max-px 1000
 done
 # Corrected logs hold scans of these raw logs (same ranges; data README): the raw
 # log gives them the stamps the relation files use.
@@ -57,6 +76,7 @@ for log in "$data"/carmen-2d/*.log*; do
     [ -f "$relations" ] && args+=(--relations "$relations")
   fi
   run "corrected-${name/-corrected/}" "${args[@]}"
+  run_lc "corrected-${name/-corrected/}" "${args[@]}"
 done
 # Raw logs scored against a corrected log of a subset of their scans (same stamps; data README).
 for pair in "mit-csail.clf.gz:csail-corrected-subset.robotlaser1.log.gz"; do
@@ -64,20 +84,22 @@ for pair in "mit-csail.clf.gz:csail-corrected-subset.robotlaser1.log.gz"; do
   reference=$data/carmen-2d/${pair##*:}
   [ -f "$raw" ] && [ -f "$reference" ] || continue
   run "raw-${pair%%.*}-vs-corrected-subset" --log "$raw" --odometry logged --reference "$reference"
+  run_lc "raw-${pair%%.*}-vs-corrected-subset" --log "$raw" --odometry logged --reference "$reference"
 done
 for laser in sick hokuyo; do
   run "sim-building-$laser" --log sim:building --sim-laser "$laser"
+  run_lc "sim-building-$laser" --log sim:building --sim-laser "$laser"
 done
 
 # One row per run; "–" where a figure does not apply (NaN or absent in the JSON).
 {
-  echo "| run | scans | odometry | relations used | rel. trans. error m (mean ± std) | rel. rot. error ° (mean ± std) | reference's rel. trans. error m | ATE m | RPE 1 m | ×real time | CPU s | ATE vs truth m | refl. rel. err. | spread raw → calibrated |"
-  echo "|---|---:|---|---:|---|---|---|---:|---:|---:|---:|---:|---:|---|"
+  echo "| run | scans | odometry | relations used | rel. trans. error m (mean ± std) | rel. rot. error ° (mean ± std) | reference's rel. trans. error m | ATE m | RPE 1 m | ×real time | CPU s | ATE vs truth m | refl. rel. err. | spread raw → calibrated | loop closures (judged, false) | optimisation s |"
+  echo "|---|---:|---|---:|---|---|---|---:|---:|---:|---:|---:|---:|---|---|---:|"
   for name in "${runs[@]}"; do
     jq -r --arg name "$name" '
       def f(d): if . == null then "–" else (. * pow(10; d) | round / pow(10; d) | tostring) end;
       def pm(x; d): if x.mean == null then "–" else "\(x.mean | f(d)) ± \(x.std | f(d))" end;
-      "| \($name) | \(.scans) | \(.odometry) | \(.relations_used) | \(pm(.rel_trans_err_m; 4)) | \(pm(.rel_rot_err_deg; 3)) | \(pm(.reference_rel_trans_err_m; 4)) | \(.ate_vs_reference_m | f(3)) | \(.rpe_1m_m | f(4)) | \(.realtime_factor | f(0)) | \(.cpu_s | f(2)) | \(.ate_vs_truth_m | f(4)) | \(.reflectivity_rel_err_median | f(3)) | \(if .reflectivity_spread_raw == null then "–" else "\(.reflectivity_spread_raw | f(3)) → \(.reflectivity_spread_calibrated | f(3))" end) |"
+      "| \($name) | \(.scans) | \(.odometry) | \(.relations_used) | \(pm(.rel_trans_err_m; 4)) | \(pm(.rel_rot_err_deg; 3)) | \(pm(.reference_rel_trans_err_m; 4)) | \(.ate_vs_reference_m | f(3)) | \(.rpe_1m_m | f(4)) | \(.realtime_factor | f(0)) | \(.cpu_s | f(2)) | \(.ate_vs_truth_m | f(4)) | \(.reflectivity_rel_err_median | f(3)) | \(if .reflectivity_spread_raw == null then "–" else "\(.reflectivity_spread_raw | f(3)) → \(.reflectivity_spread_calibrated | f(3))" end) | \(if .loop_closure == null then "–" else "\(.loop_closure.closures) (\(.loop_closure.closures_judged), \(.loop_closure.false_closures // "–"))" end) | \(.loop_closure.optimization_s | f(2)) |"
     ' "$out/$name.json"
   done
 } | tee "$out/table.md"

@@ -253,7 +253,13 @@ int runSlam2dBench(const Slam2dBenchOptions& options) {
   if (const slam2d::LoopClosureStats* lc = slam.loopClosureStats()) {
     // Judge: a corrected log of the same run (scans found by their ranges), else the reference poses.
     ClosureJudge judge;
-    for (size_t i = 0; i < data.inputs.size(); ++i) judge.index_of_stamp.emplace(data.inputs[i].scan.stamp_ns, i);
+    // A closure names its scans by stamp: scans sharing a stamp (logs whose stamps were rounded) cannot be judged.
+    constexpr size_t kShared = std::numeric_limits<size_t>::max();
+    for (size_t i = 0; i < data.inputs.size(); ++i) {
+      const auto [it, inserted] = judge.index_of_stamp.emplace(data.inputs[i].scan.stamp_ns, i);
+      if (!inserted) it->second = kShared;
+    }
+    std::erase_if(judge.index_of_stamp, [&](const auto& entry) { return entry.second == kShared; });
     std::string judged_by = data.reference_kind;
     if (!options.closure_reference_path.empty()) {
       Slam2dSourceOptions ref_source;

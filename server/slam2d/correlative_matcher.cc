@@ -20,6 +20,18 @@ struct CorrelativeMatcher::Rotation {
   uint32_t outside_sum = 0;           ///< ... those off the raster at every shift (outside_q each)
 };
 
+/// Consecutive rotations bounded together at the top level: per point, the box
+/// of its cells over them, so a bound is the maximum over the box widened by
+/// the block (two overlapping windows per axis: four lookups).
+struct CorrelativeMatcher::RotationGroup {
+  int first = 0, count = 0;       ///< rotations [first, first + count)
+  std::vector<int32_t> fast;      ///< layout index of each box's lower-left cell ...
+  std::vector<int32_t> right;     ///< ... its width − 1 in cells ...
+  std::vector<int32_t> up;        ///< ... and height − 1 in layout rows (· stride)
+  std::vector<Eigen::Vector4i> slow;  ///< boxes that may leave the layout: min x, min y, width − 1, height − 1
+  uint32_t fixed_sum = 0;         ///< outside_q per box off the raster, 255 per box wider than a block
+};
+
 /// A block of 2^level × 2^level translations starting at (dx, dy) cells, at one
 /// rotation: `score` is the quantised bound sum at level ≥ 1, the exact score at level 0.
 struct CorrelativeMatcher::Candidate {
@@ -192,6 +204,69 @@ uint32_t CorrelativeMatcher::boundAt(int h, const Rotation& rotation, int dx, in
   return sum;
 }
 
+std::vector<CorrelativeMatcher::RotationGroup> CorrelativeMatcher::group(const std::vector<Rotation>& rotations,
+                                                                          int size, int top, int reach) const {
+  const int block = 1 << top;
+  const int extent = (1 << (options_.branch_levels - 1)) - 1;
+  const size_t n = rotations.front().cells.size();
+  std::vector<RotationGroup> groups;
+  for (int first = 0; first < static_cast<int>(rotations.size()); first += size) {
+    RotationGroup g;
+    g.first = first;
+    g.count = std::min(size, static_cast<int>(rotations.size()) - first);
+    std::vector<Eigen::Vector2i> lo(rotations[static_cast<size_t>(first)].cells), hi(lo);
+    for (int r = first + 1; r < first + g.count; ++r) {
+      const std::vector<Eigen::Vector2i>& cells = rotations[static_cast<size_t>(r)].cells;
+      for (size_t i = 0; i < n; ++i) {
+        lo[i] = lo[i].cwiseMin(cells[i]);
+        hi[i] = hi[i].cwiseMax(cells[i]);
+      }
+    }
+    for (size_t i = 0; i < n; ++i) {
+      const Eigen::Vector2i span = hi[i] - lo[i];
+      if (span.x() > block || span.y() > block) {
+        g.fixed_sum += 255;  // the two-window union would miss cells: bound by a sure wall
+      } else if (hi[i].x() + reach + extent < 0 || lo[i].x() - reach >= raster_.width ||
+                 hi[i].y() + reach + extent < 0 || lo[i].y() - reach >= raster_.height) {
+        g.fixed_sum += outside_q_;
+      } else if (lo[i].x() - reach >= -pad_ && hi[i].x() + reach < raster_.width + pad_ &&
+                 lo[i].y() - reach >= -pad_ && hi[i].y() + reach < raster_.height + pad_) {
+        g.fast.push_back(static_cast<int32_t>(index(lo[i].x(), lo[i].y())));
+        g.right.push_back(span.x());
+        g.up.push_back(span.y() * stride_);
+      } else {
+        g.slow.emplace_back(lo[i].x(), lo[i].y(), span.x(), span.y());
+      }
+    }
+    groups.push_back(std::move(g));
+  }
+  return groups;
+}
+
+uint32_t CorrelativeMatcher::groupBoundAt(int h, const RotationGroup& group, int dx, int dy, uint32_t need) const {
+  const uint8_t* v = levels_[static_cast<size_t>(h)].data();
+  auto at = [&](int x, int y) {
+    const auto sx = static_cast<unsigned>(x + pad_), sy = static_cast<unsigned>(y + pad_);
+    return sx < static_cast<unsigned>(stride_) && sy < static_cast<unsigned>(rows_)
+               ? v[static_cast<size_t>(sy) * static_cast<size_t>(stride_) + sx]
+               : outside_q_;
+  };
+  uint32_t sum = group.fixed_sum;
+  for (const Eigen::Vector4i& b : group.slow) {
+    const int x = b[0] + dx, y = b[1] + dy;
+    sum += std::max({at(x, y), at(x + b[2], y), at(x, y + b[3]), at(x + b[2], y + b[3])});
+  }
+  const ptrdiff_t shift = static_cast<ptrdiff_t>(dy) * stride_ + dx;
+  const size_t n = group.fast.size();
+  for (size_t i = 0; i < n; ++i) {
+    const uint8_t* corner = v + (group.fast[i] + shift);
+    const int32_t right = group.right[i], up = group.up[i];
+    sum += std::max(std::max(corner[0], corner[right]), std::max(corner[up], corner[up + right]));
+    if ((i & 15) == 15 && sum + 255u * static_cast<uint32_t>(n - 1 - i) < need) return sum;
+  }
+  return sum;
+}
+
 uint32_t CorrelativeMatcher::needFor(double score, size_t points) {
   // The least quantised sum whose block may hold `score`, rounded down a
   // little so float rounding never prunes a block that holds it.
@@ -261,21 +336,54 @@ std::optional<CorrelativeMatch> CorrelativeMatcher::match(std::span<const Eigen:
         }
   } else {
     const int step = 1 << top;
-    const uint32_t need = needFor(min_score, points_robot.size());
-    std::vector<Candidate> candidates;
-    // Rotations innermost: neighbouring rotations move each point by at most a
-    // cell, so they read the same cache lines.
-    for (int dy = -linear_steps; dy <= linear_steps; dy += step)
-      for (int dx = -linear_steps; dx <= linear_steps; dx += step)
-        for (int r = 0; r < static_cast<int>(rotations.size()); ++r) {
-          const uint32_t sum = boundAt(top, rotations[static_cast<size_t>(r)], dx, dy, need);
-          if (sum >= need) candidates.push_back({r, dx, dy, top, static_cast<double>(sum)});
+    const size_t n = points_robot.size();
+    const uint32_t need_min = needFor(min_score, n);
+    auto byBound = [](const Candidate& a, const Candidate& b) { return a.score > b.score; };
+    // Top blocks of single rotations, searched best bound first.
+    auto searchTop = [&](std::vector<Candidate>& candidates) {
+      std::stable_sort(candidates.begin(), candidates.end(), byBound);
+      for (const Candidate& c : candidates) {
+        if (best && c.score < needFor(best->score, n)) break;
+        descend(rotations, c, linear_steps, min_score, best);
+      }
+    };
+    // A group of rotations moves the farthest point by about one cell per
+    // rotation: half a top block widens the bound little (measured: groups of
+    // 2^(top−1) and 2^top about equal, 2^(top−2) 10 % and 2^(top−3) 25 % slower).
+    const int group_size = top >= 2 ? 1 << (top - 1) : 1;
+    if (group_size > 1 && static_cast<int>(rotations.size()) >= 2 * group_size) {
+      const std::vector<RotationGroup> groups = group(rotations, group_size, top, linear_steps);
+      std::vector<Candidate> blocks;  // `rotation` indexes groups here
+      for (int dy = -linear_steps; dy <= linear_steps; dy += step)
+        for (int dx = -linear_steps; dx <= linear_steps; dx += step)
+          for (int g = 0; g < static_cast<int>(groups.size()); ++g) {
+            const uint32_t sum = groupBoundAt(top, groups[static_cast<size_t>(g)], dx, dy, need_min);
+            if (sum >= need_min) blocks.push_back({g, dx, dy, top, static_cast<double>(sum)});
+          }
+      std::stable_sort(blocks.begin(), blocks.end(), byBound);
+      std::vector<Candidate> members;
+      for (const Candidate& b : blocks) {
+        const uint32_t need = best ? std::max(need_min, needFor(best->score, n)) : need_min;
+        if (b.score < need) break;
+        const RotationGroup& g = groups[static_cast<size_t>(b.rotation)];
+        members.clear();
+        for (int r = g.first; r < g.first + g.count; ++r) {
+          const uint32_t sum = boundAt(top, rotations[static_cast<size_t>(r)], b.dx, b.dy, need);
+          if (sum >= need) members.push_back({r, b.dx, b.dy, top, static_cast<double>(sum)});
         }
-    std::stable_sort(candidates.begin(), candidates.end(),
-                     [](const Candidate& a, const Candidate& b) { return a.score > b.score; });
-    for (const Candidate& c : candidates) {
-      if (best && c.score < needFor(best->score, points_robot.size())) break;
-      descend(rotations, c, linear_steps, min_score, best);
+        searchTop(members);
+      }
+    } else {
+      std::vector<Candidate> candidates;
+      // Rotations innermost: neighbouring rotations move each point by at most a
+      // cell, so they read the same cache lines.
+      for (int dy = -linear_steps; dy <= linear_steps; dy += step)
+        for (int dx = -linear_steps; dx <= linear_steps; dx += step)
+          for (int r = 0; r < static_cast<int>(rotations.size()); ++r) {
+            const uint32_t sum = boundAt(top, rotations[static_cast<size_t>(r)], dx, dy, need_min);
+            if (sum >= need_min) candidates.push_back({r, dx, dy, top, static_cast<double>(sum)});
+          }
+      searchTop(candidates);
     }
   }
   if (!best) return std::nullopt;

@@ -7,16 +7,21 @@
 /// The search lattice (SearchLattice) is every rotation θ_k = θ_c + k·δ,
 /// |k| ≤ K, times every translation t_c + (i, j)·resolution, |i|, |j| ≤ L,
 /// around the centre pose c. At rotation k a point p falls in the cell
-/// c_k(p) = floor((R(θ_k)·p + t_c − origin) / resolution), and the score of
+/// c_k(p) = ProbabilityRaster::cellOf(R(θ_k)·p + t_c), and the score of
 /// lattice pose (k, i, j) is the mean over the points of the raster value at
 /// c_k(p) + (i, j): the mean occupancy probability of the cells the scan's
 /// endpoints hit, in [0, 1].
 ///
 /// The matcher precomputes max-pooled levels of the raster (level h holds,
 /// per cell, the maximum over the 2^h × 2^h cells above and to the right of
-/// it), so the score of a 2^h × 2^h block of translations is bounded from
-/// above by one lookup per point, and searches depth first, best bound first,
-/// pruning blocks whose bound cannot beat the best pose found or min_score.
+/// it, rounded up to 1/255 in a byte), so the score of a 2^h × 2^h block of
+/// translations is bounded from above by one lookup per point, and searches
+/// depth first, best bound first, pruning blocks whose bound cannot beat the
+/// best pose found or reach min_score; lattice poses that pass their level-0
+/// bound get their exact score from the float raster. At the coarsest level,
+/// groups of consecutive rotations are bounded together first (per point, the
+/// box of its cells over the group), so most rotations of a wide angular
+/// window are never bounded one by one.
 /// The result equals brute force over the lattice (same score; the same pose
 /// unless several tie).
 
@@ -100,6 +105,7 @@ class CorrelativeMatcher {
  private:
   struct Candidate;
   struct Rotation;
+  struct RotationGroup;
 
   std::vector<Rotation> discretise(std::span<const Eigen::Vector2d> points_robot, const Pose2& center,
                                    const SearchLattice& lattice) const;
@@ -108,6 +114,10 @@ class CorrelativeMatcher {
   /// Quantised bound sum (units of 1/255, h ≥ 0) of the 2^h block of shifts from
   /// (dx, dy); may stop early with any value below `need` once it cannot reach it.
   uint32_t boundAt(int h, const Rotation& rotation, int dx, int dy, uint32_t need) const;
+  /// Groups of `size` consecutive rotations for bounds at level `top` over shifts within ±reach.
+  std::vector<RotationGroup> group(const std::vector<Rotation>& rotations, int size, int top, int reach) const;
+  /// Quantised bound sum of a 2^h block of shifts from (dx, dy) over a group's rotations (as boundAt).
+  uint32_t groupBoundAt(int h, const RotationGroup& group, int dx, int dy, uint32_t need) const;
   /// The least bound sum of a block that may hold a pose scoring `score`.
   static uint32_t needFor(double score, size_t points);
   /// Depth-first, best bound first, below `block` (level ≥ 1); `best` holds the best pose so far.

@@ -47,10 +47,13 @@ void LoopClosureOptions::validate() const {
   require(nonNegative(support_tolerance_m) && nonNegative(support_tolerance_rad), "support_tolerance_* must be ≥ 0");
   require(optimize_every_keyframes >= 1, "optimize_every_keyframes must be ≥ 1");
   require(positive(sequential_sigma_m) && positive(sequential_sigma_rad) && positive(loop_sigma_m) &&
-              positive(loop_sigma_rad),
-          "edge standard deviations must be finite and > 0");
+              positive(loop_sigma_rad) && nonNegative(sequential_sigma_m_per_m) &&
+              nonNegative(sequential_sigma_rad_per_m),
+          "edge standard deviations must be finite and > 0 (their growth ≥ 0)");
   require(positive(max_loop_error_m) && positive(max_loop_error_rad), "max_loop_error_* must be > 0");
   require(cached_submaps >= 1, "cached_submaps must be ≥ 1");
+  require(nonNegative(match_point_spacing_m), "match_point_spacing_m must be ≥ 0");
+  require(nonNegative(rerender_shift_m) && nonNegative(rerender_shift_rad), "rerender_shift_* must be ≥ 0");
   require(submap.levels >= 1 && submap.levels <= 8, "submap.levels must be in [1, 8]");
   require(submap.unknown_probability >= 0.0f && submap.unknown_probability <= 1.0f,
           "submap.unknown_probability must be in [0, 1]");
@@ -77,8 +80,11 @@ bool LoopCloser::addKeyframe(std::vector<Keyframe>& keyframes) {
   TrajectoryState& trajectory = trajectories_[kf.trajectory];
   if (trajectory.last_keyframe) {
     const Pose2 step = between(keyframes[*trajectory.last_keyframe].pose, kf.pose);
+    const double d = step.translation().norm();
     graph_.addEdge({*trajectory.last_keyframe, q, toGraph(step),
-                    diagonalInformation(options_.sequential_sigma_m, options_.sequential_sigma_rad), false});
+                    diagonalInformation(options_.sequential_sigma_m + options_.sequential_sigma_m_per_m * d,
+                                        options_.sequential_sigma_rad + options_.sequential_sigma_rad_per_m * d),
+                    false});
     trajectory.travel_since_closure_m += step.translation().norm();
   }
   if (!trajectory.last_keyframe || submaps_[trajectory.open_submap].finished) {
@@ -108,7 +114,9 @@ bool LoopCloser::addKeyframe(std::vector<Keyframe>& keyframes) {
       continue;
     }
     for (Pending& o : pending_) {
-      if (&o == &p || o.closure.query == p.closure.query || !agree(p, o)) continue;
+      // Support comes from another keyframe matched against another submap: consecutive
+      // keyframes against one submap repeat the same aliasing (seen on raw fr079).
+      if (o.closure.query == p.closure.query || o.closure.match == p.closure.match || !agree(p, o)) continue;
       p.supported = o.supported = true;
       large_correction = true;
     }

@@ -262,8 +262,11 @@ Pose2 Slam2d::addScan(const std::string& trajectory, const LaserScan& scan, cons
     track.last_update_pose = estimate;
     ++version_;
     if (loop_closer_) {
-      kf.match_points.reserve(points.size());
-      for (const MatchPoint& p : points) kf.match_points.push_back(p.p_m);
+      const double loop_spacing2 = std::pow(options_.loop_closure.match_point_spacing_m, 2);
+      for (const MatchPoint& p : points)
+        if (kf.match_points.empty() || (p.p_m - kf.match_points.back()).squaredNorm() >= loop_spacing2)
+          kf.match_points.push_back(p.p_m);
+      rendered_.push_back(estimate);
     } else {
       // Without loop closure a keyframe only anchors its scans' poses.
       kf.ends_robot = {};
@@ -302,6 +305,14 @@ void Slam2d::applyCorrection(const std::vector<std::pair<Pose2, Pose2>>& relativ
     t.pose = k * relative_to_keyframe[t.index].first;
     t.last_update_pose = k * relative_to_keyframe[t.index].second;
   }
+  bool far = false;
+  for (size_t i = 0; i < keyframes_.size() && !far; ++i) {
+    const Pose2 d = between(rendered_[i], keyframes_[i].pose);
+    far = d.translation().norm() > options_.loop_closure.rerender_shift_m ||
+          std::abs(d.theta_rad) > options_.loop_closure.rerender_shift_rad;
+  }
+  if (!far) return;
+  for (size_t i = 0; i < keyframes_.size(); ++i) rendered_[i] = keyframes_[i].pose;
   GridMap2d map(options_.resolution_m, options_.levels);
   for (const Keyframe& kf : keyframes_) {
     const auto model = kf.model.empty() ? models_.end() : models_.find(kf.model);

@@ -158,8 +158,10 @@ class Slam2d {
   /// Every scan's robot pose in scan order, corrected by the pose graph (each
   /// scan rides on the keyframe before it); empty for an unknown trajectory.
   std::vector<StampedPose2> trajectory(const std::string& trajectory) const;
-  /// Increments after each optimisation that moved poses; grid() is then
-  /// re-rendered from the keyframes at their corrected poses (version() changes too).
+  /// Increments after each optimisation that moved a keyframe beyond
+  /// LoopClosureOptions::rerender_shift_* from where the map holds it; grid()
+  /// is then re-rendered from the keyframes at their corrected poses
+  /// (version() changes too). Smaller corrections move the poses only.
   uint64_t graphVersion() const { return graph_version_; }
   /// Loop closure counters and timing; nullptr when loop closure is off.
   const LoopClosureStats* loopClosureStats() const { return loop_closer_ ? &loop_closer_->stats() : nullptr; }
@@ -203,6 +205,7 @@ class Slam2d {
   std::vector<std::vector<ScanRecord>> scans_;  ///< by trajectory index
   /// Every map update's scan; without loop closure only stamp, pose and trajectory are kept.
   std::vector<Keyframe> keyframes_;
+  std::vector<Pose2> rendered_;  ///< per keyframe, the pose the map holds it at (loop closure only)
   std::unique_ptr<LoopCloser> loop_closer_;
   uint64_t version_ = 0;
   uint64_t graph_version_ = 0;

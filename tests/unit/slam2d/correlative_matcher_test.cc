@@ -84,16 +84,29 @@ TEST(CorrelativeMatcher, EqualsBruteForceOnRandomRasters) {
     const ProbabilityRaster raster = randomRaster(rng, 37 + trial, 29);
     std::vector<Eigen::Vector2d> points;
     for (int n = 0; n < 20 + trial; ++n) points.push_back({1.6 * u(rng), 1.6 * u(rng)});
+    // With a fixed angular step (else they would make it fine and the brute
+    // force slow): a few points off the raster at every shift (they score
+    // outside_p whatever the pose).
+    // Others 8.5 m out: beyond the levels' padding for some rotations, not off the raster.
+    if (trial % 2 == 1) {
+      for (int n = 0; n < 3; ++n) points.push_back({5.0 * u(rng) + (u(rng) > 0 ? 20.0 : -20.0), 4.0 * u(rng)});
+      for (int n = 0; n < 3; ++n) {
+        const double a = std::numbers::pi * u(rng);
+        points.push_back({8.5 * std::cos(a), 8.5 * std::sin(a)});
+      }
+    }
     const Pose2 center{1.2 + 0.5 * u(rng), 1.5 + 0.5 * u(rng), std::numbers::pi * u(rng)};
-    const double window_m = 0.45 + 0.2 * (trial % 4), window_rad = 0.3 * (trial % 3);
+    // Every fourth a full turn: enough rotations for the matcher to bound groups of them.
+    const double window_m = 0.45 + 0.2 * (trial % 4), window_rad = trial % 4 == 3 ? std::numbers::pi : 0.3 * (trial % 3);
+    CorrelativeMatcherOptions options;
+    options.angular_step_rad = trial % 2 == 0 ? 0.0 : 0.07;
+    // The lattice depends on the step only, so one enumeration serves every level count.
+    const double expected = bruteForceBest(CorrelativeMatcher(raster, options), points, center, window_m, window_rad);
     // fast_window_m 0: most points take the checked path; 5 m: all do not.
     for (const auto& [levels, fast_window_m] : {std::pair{1, 5.0}, {2, 5.0}, {3, 0.0}, {3, 5.0}, {7, 0.0}, {7, 5.0}}) {
-      CorrelativeMatcherOptions options;
       options.branch_levels = levels;
       options.fast_window_m = fast_window_m;
-      options.angular_step_rad = trial % 2 == 0 ? 0.0 : 0.07;
       const CorrelativeMatcher matcher(raster, options);
-      const double expected = bruteForceBest(matcher, points, center, window_m, window_rad);
       const std::optional<CorrelativeMatch> m = matcher.match(points, center, window_m, window_rad, 0.0);
       ASSERT_TRUE(m) << "trial " << trial << " levels " << levels << " fast " << fast_window_m;
       EXPECT_EQ(m->score, expected) << "trial " << trial << " levels " << levels << " fast " << fast_window_m;
