@@ -24,15 +24,23 @@ LoopClosureFeed::~LoopClosureFeed() { stop(); }
 bool LoopClosureFeed::push(Frame frame, bool wait) {
   if (!accepts(frame.kind)) throw std::invalid_argument("loop closure feed: no recognizer for this kind of frame");
   std::unique_lock lock(mutex_);
-  if (!wait && queue_.size() >= max_queued_) {
+  if (!wait && queued_frames_ >= max_queued_) {
     metrics_.loop_frames_dropped.fetch_add(1, std::memory_order_relaxed);
     return false;
   }
-  changed_.wait(lock, [&] { return queue_.size() < max_queued_ || stopping_; });
+  changed_.wait(lock, [&] { return queued_frames_ < max_queued_ || stopping_; });
   if (stopping_) return false;
-  queue_.push_back(std::move(frame));
+  queue_.emplace_back(std::move(frame));
+  ++queued_frames_;
   changed_.notify_all();
   return true;
+}
+
+void LoopClosureFeed::post(LoopClosure closure) {
+  std::lock_guard lock(mutex_);
+  if (stopping_) return;
+  queue_.emplace_back(std::move(closure));
+  changed_.notify_all();
 }
 
 void LoopClosureFeed::drain() {
@@ -52,7 +60,7 @@ void LoopClosureFeed::stop() {
 
 size_t LoopClosureFeed::queued() const {
   std::lock_guard lock(mutex_);
-  return queue_.size();
+  return queued_frames_;
 }
 
 void LoopClosureFeed::run() {
@@ -60,12 +68,17 @@ void LoopClosureFeed::run() {
   for (;;) {
     changed_.wait(lock, [&] { return stopping_ || !queue_.empty(); });
     if (queue_.empty()) break;  // stopping, and what was queued is done
-    Frame frame = std::move(queue_.front());
+    std::variant<Frame, LoopClosure> item = std::move(queue_.front());
     queue_.pop_front();
+    if (std::holds_alternative<Frame>(item)) --queued_frames_;
     busy_ = true;
     changed_.notify_all();  // room in the queue
     lock.unlock();
-    process(frame);
+    if (Frame* frame = std::get_if<Frame>(&item)) {
+      process(*frame);
+    } else {
+      deliver(std::get<LoopClosure>(item));
+    }
     lock.lock();
     busy_ = false;
     changed_.notify_all();
@@ -96,8 +109,13 @@ void LoopClosureFeed::process(Frame& frame) {
                   match->reference_frame, source.places.size());
     return;
   }
+  deliver({map_, sourceOf(frame.kind), source.places.back(), source.places[reference], match->score});
+}
+
+void LoopClosureFeed::deliver(const LoopClosure& closure) {
+  if (!sink_) return;
   try {
-    sink_({map_, sourceOf(frame.kind), source.places.back(), source.places[reference], match->score});
+    sink_(closure);
   } catch (const std::exception& e) {
     spdlog::error("map {}: loop closure not stored: {}", map_, e.what());
   }

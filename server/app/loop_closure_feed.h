@@ -19,6 +19,7 @@
 #include <mutex>
 #include <string>
 #include <thread>
+#include <variant>
 #include <vector>
 
 #include "app/loop_closures.h"
@@ -51,10 +52,15 @@ class LoopClosureFeed {
   /// Queues a frame of an accepted kind. A full queue: waits when `wait`, else drops the frame.
   /// @return whether the frame was queued
   bool push(Frame frame, bool wait);
-  /// Waits until every queued frame went through its recognizer.
+  /// Queues a closure found elsewhere (the 2D SLAM's) for the sink, after the frames queued
+  /// before it: storing it (a durable write) then costs the map's worker nothing. Never drops
+  /// nor waits.
+  void post(LoopClosure closure);
+  /// Waits until every queued frame went through its recognizer and every posted closure to the sink.
   void drain();
   /// Processes what is queued and joins the thread; later calls do nothing.
   void stop();
+  /// Frames waiting (posted closures not included).
   size_t queued() const;
 
  private:
@@ -64,6 +70,7 @@ class LoopClosureFeed {
   };
   void run();
   void process(Frame& frame);
+  void deliver(const LoopClosure& closure);
 
   std::string map_;
   std::map<FrameKind, Recognizer> recognizers_;
@@ -73,7 +80,8 @@ class LoopClosureFeed {
 
   mutable std::mutex mutex_;
   std::condition_variable changed_;
-  std::deque<Frame> queue_;
+  std::deque<std::variant<Frame, LoopClosure>> queue_;
+  size_t queued_frames_ = 0;
   bool busy_ = false;  ///< a frame taken off the queue is being processed
   bool stopping_ = false;
   std::thread thread_;

@@ -66,13 +66,13 @@ MapWorker::MapWorker(std::string name, std::unique_ptr<map3d::CuboidMap> map, in
       store_(store),
       metrics_(metrics),
       pose_sink_(std::move(pose_sink)),
-      loop_sink_(std::move(loop.sink)),
+
       slam2d_(slam2d.calibrations, metrics),
       sensors_(slam2d.sensors),
       estimate_sink_(std::move(slam2d.estimate_sink)),
       slam_first_input_id_(slam2d.first_input_id),
       loop_first_input_id_(loop.first_input_id),
-      loop_feed_(std::make_unique<LoopClosureFeed>(name_, loop.recognizers, loop_sink_, metrics,
+      loop_feed_(std::make_unique<LoopClosureFeed>(name_, loop.recognizers, std::move(loop.sink), metrics,
                                                    kLoopQueueFrames)),
       restored_id_(applied_id),
       applied_id_(applied_id),
@@ -336,14 +336,10 @@ void MapWorker::applyScan(int64_t log_id, const v1::RobotMessage& message, const
   map3d::CellKey origin_cell;
   planar.in_map3d = !points.empty() && map_->grid().cellChecked(origin, origin_cell);
   planar_scans_[robot_id].push_back(planar);
+  // Stored by the feed's thread: a durable write per closure would hold this worker's acks back.
   for (const slam2d::LoopClosure2d& c : result->closures) {
-    if (!loop_sink_) break;
-    try {
-      loop_sink_({name_, LoopSource::kGeometry, {c.query_trajectory, c.query_stamp_ns, planarIsometry(c.query_pose, 0.0)},
-                  {c.match_trajectory, c.match_stamp_ns, planarIsometry(c.match_pose, 0.0)}, c.score});
-    } catch (const std::exception& e) {
-      spdlog::error("map {}: loop closure not stored: {}", name_, e.what());
-    }
+    loop_feed_->post({name_, LoopSource::kGeometry, {c.query_trajectory, c.query_stamp_ns, planarIsometry(c.query_pose, 0.0)},
+                      {c.match_trajectory, c.match_stamp_ns, planarIsometry(c.match_pose, 0.0)}, c.score});
   }
   if (!in_map3d) {
     if (planar.in_map3d) {

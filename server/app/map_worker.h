@@ -153,7 +153,6 @@ class MapWorker {
   store::Store& store_;
   Metrics& metrics_;
   PoseSink pose_sink_;
-  LoopClosureSink loop_sink_;
   TileIndex tiles_;
   Slam2dLayer slam2d_;
   const RobotSensors& sensors_;

@@ -6,6 +6,7 @@
 // are closer to the truth than the estimates the robots got live.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <map>
@@ -88,10 +89,10 @@ TEST(LoopClosure, TwoRobotsCrossingOnOneMapCloseALoopAndTheirTrajectoriesAreCorr
   laser.odometry_forward_sigma = 0.1;
   laser.odometry_heading_sigma_rad = 0.04;
 
-  // West's idea of where it starts is off by 0.4 m and 3°: until the robots meet, it maps its end
+  // West's idea of where it starts is off by 0.64 m and 4.6°: until the robots meet, it maps its end
   // of the building that far off; the closures with east's map pull it back.
   SimRobot a{"east", client::Laser2dRobot(world, tour, laser, 11), {0, 0, 0}, nullptr, {}, {}, {}};
-  SimRobot b{"west", client::Laser2dRobot(world, reversedTour(tour), laser, 12), {0.3, -0.25, 0.05}, nullptr, {}, {},
+  SimRobot b{"west", client::Laser2dRobot(world, reversedTour(tour), laser, 12), {0.5, -0.4, 0.08}, nullptr, {}, {},
              {}};
   for (SimRobot* r : {&a, &b}) {
     client::RobotClientOptions options;
@@ -115,8 +116,9 @@ TEST(LoopClosure, TwoRobotsCrossingOnOneMapCloseALoopAndTheirTrajectoriesAreCorr
     // Until the test is done and the stream has been quiet for a while (a timed-out read
     // cancels the stream, so there is one).
     while (std::optional<nlohmann::json> frame = viewer.next(std::chrono::seconds(3))) {
-      if (frame->value("type", "") == "loop_closure") pushed.push_back(std::move(*frame));
-      if (!watching && frame->value("type", "") != "loop_closure") break;
+      const bool loop = frame->is_object() && frame->value("type", "") == "loop_closure";
+      if (loop) pushed.push_back(std::move(*frame));
+      if (!watching && !loop) break;
     }
   });
   const auto start = std::chrono::steady_clock::now();
@@ -147,23 +149,33 @@ TEST(LoopClosure, TwoRobotsCrossingOnOneMapCloseALoopAndTheirTrajectoriesAreCorr
   // The loop closures, and at least one between the two robots.
   client::HttpClient http(rmapd->httpUrl());
   nlohmann::json closures;
-  for (int attempt = 0; attempt < 50; ++attempt) {  // place recognition runs behind the acks
-    closures = getJson(http, "/v1/loop-closures?map=shared").at("loop_closures");
-    bool cross = false;
-    for (const nlohmann::json& c : closures) cross = cross || c["query"]["robot_id"] != c["match"]["robot_id"];
-    if (cross) break;
+  // A cross-robot geometric closure (the one the correction rests on).
+  const auto isCross = [](const nlohmann::json& c) {
+    return c["source"] == "geometry" && c["query"]["robot_id"] != c["match"]["robot_id"];
+  };
+  for (int attempt = 0; attempt < 50; ++attempt) {  // closures are stored behind the acks
+    closures = getJson(http, "/v1/loop-closures?map=shared&limit=100000").at("loop_closures");
+    if (std::any_of(closures.begin(), closures.end(), isCross)) break;
     std::this_thread::sleep_for(std::chrono::milliseconds(200));
   }
-  std::map<std::string, int> by_source;
+  std::map<std::string, int> by_source, far_apart;  // far apart: the two places > 8 m from each other
   const nlohmann::json* cross = nullptr;
   for (const nlohmann::json& c : closures) {
-    ++by_source[c["source"].get<std::string>()];
-    EXPECT_TRUE(c["source"] == "camera" || c["source"] == "laser_intensity" || c["source"] == "geometry") << c;
+    const std::string source = c["source"];
+    ++by_source[source];
+    EXPECT_TRUE(source == "camera" || source == "laser_intensity" || source == "geometry") << c;
     EXPECT_EQ(c["map"], "shared");
-    if (!cross && c["query"]["robot_id"] != c["match"]["robot_id"]) cross = &c;
+    if (c["query"]["position"].is_array() && c["match"]["position"].is_array()) {
+      const Eigen::Vector3d q = planarOf(c["query"]["position"], c["query"]["orientation"]);
+      const Eigen::Vector3d m = planarOf(c["match"]["position"], c["match"]["orientation"]);
+      far_apart[source] += (q - m).head<2>().norm() > 8.0;
+    }
+    if (!cross && isCross(c)) cross = &c;
   }
-  std::printf("[ closures ] %zu: geometry %d, laser_intensity %d\n", closures.size(), by_source["geometry"],
-              by_source["laser_intensity"]);
+  std::printf("[ closures ] %zu: geometry %d (%d far apart), laser_intensity %d (%d far apart)\n", closures.size(),
+              by_source["geometry"], far_apart["geometry"], by_source["laser_intensity"],
+              far_apart["laser_intensity"]);
+  EXPECT_EQ(far_apart["geometry"], 0);
   ASSERT_NE(cross, nullptr) << closures.dump();
   const nlohmann::json& c = *cross;
   for (const char* end : {"query", "match"}) {

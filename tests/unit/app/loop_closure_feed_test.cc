@@ -71,6 +71,25 @@ TEST(LoopClosureFeed, AcceptedMatchesBecomeClosuresBetweenTheFramesPlaces) {
   EXPECT_EQ(metrics.loop_frames_refused.load(), 1u);
 }
 
+TEST(LoopClosureFeed, PostedClosuresReachTheSinkInOrderWithTheFrames) {
+  Metrics metrics;
+  Collected out;
+  LoopClosureFeed feed(
+      "lab", [](FrameKind) { return std::make_unique<SameGreyRecognizer>(); }, out.sink(), metrics, 1);
+  for (int64_t i = 0; i < 3; ++i) feed.push(frame(FrameKind::kCamera, "r1", i, i == 2 ? 40 : 40 + i), true);
+  // Posted after the frames (the queue bound is for frames only): delivered after their closure.
+  for (int64_t i = 0; i < 3; ++i) {
+    feed.post({"lab", LoopSource::kGeometry, {"r2", 100 + i, std::nullopt}, {"r1", i, std::nullopt}, 0.5});
+  }
+  feed.drain();
+  ASSERT_EQ(out.closures.size(), 4u);
+  EXPECT_EQ(out.closures[0].source, LoopSource::kCamera);
+  for (int i = 1; i < 4; ++i) {
+    EXPECT_EQ(out.closures[i].source, LoopSource::kGeometry);
+    EXPECT_EQ(out.closures[i].query.stamp_ns, 100 + i - 1);
+  }
+}
+
 TEST(LoopClosureFeed, PatchClosuresReportLaserIntensity) {
   Metrics metrics;
   Collected out;
