@@ -3,6 +3,8 @@
 #include <exception>
 #include <iostream>
 
+#include "loop/loop_bench.h"
+#include "loop_sim/loop_sim_bench.h"
 #include "map3d/map3d_bench.h"
 #include "server/server_bench.h"
 #include "slam2d/slam2d_bench.h"
@@ -103,6 +105,68 @@ int main(int argc, char** argv) {
   c->add_option("--lidar-pair", calib.lidar_pair_dir, "folder with source.ply, target.ply, T_target_source.txt ('' skips)");
   c->add_option("--json", calib.json_out, "write results as JSON to this file");
 
+  rmap::bench::LoopBenchOptions loop;
+  CLI::App* l = app.add_subcommand("loop", "place recognition on an image sequence: precision-recall vs ground-truth loops, ms/frame");
+  l->add_option("--images", loop.images_dir, "folder of images in frame order (sorted by name)")->required();
+  l->add_option("--ground-truth", loop.ground_truth, "'query reference' pairs, 0-based, # comments (omit: timing only)");
+  l->add_option("--json", loop.json_out, "write results as JSON to this file");
+  l->add_option("--csv-prefix", loop.csv_prefix, "write P_pr_tol<k>.csv, P_frames.csv and P_pr.png");
+  l->add_option("--descriptor", loop.descriptor, "binary descriptor")->check(CLI::IsMember({"orb", "brisk", "akaze"}));
+  l->add_option("--max-features", loop.max_features, "keypoints per frame at most")->check(CLI::Range(1, 100000));
+  l->add_option("--max-frames", loop.max_frames, "only the first N frames (0: all)");
+  l->add_option("--threads", loop.threads, "OpenCV threads")->check(CLI::Range(1, 64));
+  l->add_option("--resize", [&](const std::vector<std::string>& v) {
+       loop.resize_width = std::stoi(v.at(0));
+       loop.resize_height = std::stoi(v.at(1));
+       return loop.resize_width > 0 && loop.resize_height > 0;
+     }, "resize every frame to W H pixels first")->expected(2);
+  l->add_option("--min-score", loop.detector.min_score, "acceptance threshold on the detector's score (inlier evidence)");
+
+  // Simulated revisit sequences: the options both loop-sim and loop-compare take.
+  auto addSequenceOptions = [](CLI::App* a, rmap::bench::SimSequenceOptions& seq, rmap::loop::PanoramaOptions& pano) {
+    a->add_option("--seed", seq.seed, "simulation seed (course, path, noise)");
+    a->add_option("--laps", seq.revisit.laps, "laps of the loop course")->check(CLI::Range(1, 100));
+    a->add_option("--step", seq.revisit.step_m, "metres between frames")->check(CLI::PositiveNumber);
+    a->add_option("--course-size", [&seq](const std::vector<std::string>& v) {
+         seq.course.size_x_m = std::stod(v.at(0));
+         seq.course.size_y_m = std::stod(v.at(1));
+         return true;
+       }, "loop course footprint X Y, metres")->expected(2);
+    a->add_option("--camera-size", [&seq](const std::vector<std::string>& v) {
+         seq.camera.width_px = std::stoi(v.at(0));
+         seq.camera.height_px = std::stoi(v.at(1));
+         return true;
+       }, "camera image W H, pixels")->expected(2);
+    a->add_option("--lidar-rings", seq.lidar.rings, "simulated lidar rings")->check(CLI::Range(1, 1024));
+    a->add_option("--lidar-columns", seq.lidar.columns, "simulated lidar columns")->check(CLI::Range(1, 16384));
+    a->add_option("--panorama-size", [&pano](const std::vector<std::string>& v) {
+         pano.width_px = std::stoi(v.at(0));
+         pano.height_px = std::stoi(v.at(1));
+         return true;
+       }, "laser panorama W H, pixels")->expected(2);
+  };
+
+  rmap::bench::LoopSimBenchOptions loop_sim;
+  CLI::App* ls = app.add_subcommand("loop-sim", "place recognition on a simulated revisit sequence (camera or laser intensity)");
+  ls->add_option("--modality", loop_sim.modality, "camera or laser")->check(CLI::IsMember({"camera", "laser"}));
+  ls->add_flag("--dark", loop_sim.dark, "revisit laps in the dark (light ~0 + sensor noise; laser unaffected)");
+  ls->add_option("--projection", loop_sim.projection, "laser panorama projection")
+      ->check(CLI::IsMember({"equirectangular", "ring"}));
+  ls->add_option("--descriptor", loop_sim.descriptor, "binary descriptor")->check(CLI::IsMember({"orb", "brisk", "akaze"}));
+  ls->add_option("--threads", loop_sim.threads, "OpenCV threads")->check(CLI::Range(1, 64));
+  ls->add_option("--json", loop_sim.json_out, "write results as JSON to this file");
+  addSequenceOptions(ls, loop_sim.sequence, loop_sim.panorama);
+
+  rmap::bench::LoopCompareOptions compare;
+  compare.lidar_pair_dir = std::string(RMAP_SHARED_DATA_DIR) + "/lidar-intensity/small-gicp-pair";
+  CLI::App* lc = app.add_subcommand("loop-compare",
+                                    "projection models x descriptors on simulated lidar-intensity panoramas, plus a real lidar pair");
+  lc->add_option("--tolerance", compare.tolerance, "frames, for recall at 100 % precision")->check(CLI::NonNegativeNumber);
+  lc->add_option("--lidar-pair", compare.lidar_pair_dir, "folder with source.ply, target.ply, T_target_source.txt ('' skips)");
+  lc->add_option("--threads", compare.threads, "OpenCV threads")->check(CLI::Range(1, 64));
+  lc->add_option("--json", compare.json_out, "write results as JSON to this file");
+  addSequenceOptions(lc, compare.sequence, compare.panorama);
+
   CLI11_PARSE(app, argc, argv);
   try {
     if (m->parsed()) return rmap::bench::runMap3dBench(map3d);
@@ -112,6 +176,9 @@ int main(int argc, char** argv) {
       return rmap::bench::runSlam2dBench(slam2d);
     }
     if (c->parsed()) return rmap::bench::runCalibrationBench(calib);
+    if (l->parsed()) return rmap::bench::runLoopBench(loop);
+    if (ls->parsed()) return rmap::bench::runLoopSimBench(loop_sim);
+    if (lc->parsed()) return rmap::bench::runLoopCompareBench(compare);
   } catch (const std::exception& e) {
     std::cerr << "rmap-bench: " << e.what() << std::endl;
     return 1;

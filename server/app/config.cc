@@ -95,6 +95,11 @@ void loadConfigFile(const std::filesystem::path& file, Config& config) {
     readAuth(root["auth"], config.auth);
     readLimits(root["limits"], config.limits);
     readMaps(root["maps"], config.maps);
+    if (const YAML::Node loop = root["loop_closure"]) {
+      read(loop, "camera", config.loop_closure.camera);
+      read(loop, "cloud_intensity", config.loop_closure.cloud_intensity);
+      read(loop, "reflectivity_patches", config.loop_closure.reflectivity_patches);
+    }
     if (const YAML::Node slam2d = root["slam2d"]) {
       if (const YAML::Node files = slam2d["calibrations"]) {
         for (const auto& [model, file] : files.as<std::map<std::string, std::string>>()) {

@@ -55,6 +55,13 @@ struct Slam2dConfig {
   std::map<std::string, std::filesystem::path> calibration_files;
 };
 
+/// Which images place recognition runs on, per map (server/loop's detector with its defaults).
+struct LoopClosureConfig {
+  bool camera = true;                ///< camera images
+  bool cloud_intensity = true;       ///< intensity panoramas of 3D clouds that carry intensities
+  bool reflectivity_patches = true;  ///< reflectivity patches of the 2D map around 2D-laser robots
+};
+
 /// The build's web viewer directory (RMAP_WEB_ROOT, set by CMake; by default
 /// the source tree's web/), so a build tree serves the viewer as it is.
 std::filesystem::path defaultWebRoot();
@@ -74,6 +81,7 @@ struct Config {
   LimitsConfig limits;
   MapDefaults maps;
   Slam2dConfig slam2d;
+  LoopClosureConfig loop_closure;
   std::string log_level = "info";
 };
 

@@ -4,6 +4,8 @@
 
 #include <chrono>
 
+#include "app/ingest.h"
+#include "app/loop_closures.h"
 #include "net/json_error.h"
 
 namespace rmap::app {
@@ -197,28 +199,36 @@ net::Response HttpApi::trajectory(const net::Request& request, const Target& tar
 }
 
 net::Response HttpApi::loopClosures(const net::Request& request, const Target& target) {
-  const std::string map = target.text("map");
-  if (!map.empty() && !service_.findMap(map)) throw ApiError(404, "map_not_found", "no map named '" + map + "'");
-  const int64_t since = target.integer("since", 0, 0, INT64_MAX);
-  const int64_t limit = target.integer("limit", 1000, 1, 100'000);
-  nlohmann::json events = nlohmann::json::array();
-  // The store cannot filter by kind: read on past other events until the page is full or the events end.
-  const size_t page = static_cast<size_t>(limit);
-  for (int64_t cursor = since; events.size() < page;) {
-    const std::vector<store::EventRecord> read = service_.store().events(map, cursor, page);
-    for (const store::EventRecord& e : read) {
-      cursor = e.id;
-      if (e.kind != "loop_closure") continue;
-      nlohmann::json event = nlohmann::json::parse(e.json);
-      event["id"] = e.id;
-      event["map"] = e.map;
-      event["stamp_ns"] = e.stamp_ns;
-      events.push_back(std::move(event));
-      if (events.size() == page) break;
+  for (const auto& [key, value] : target.query) {
+    if (key != "map" && key != "robot" && key != "source" && key != "since" && key != "limit") {
+      throw ApiError(400, "invalid_argument",
+                     "unknown query parameter '" + key + "'; use map, robot, source, since, limit");
     }
-    if (read.size() < page) break;
   }
-  return jsonResponse(request, {{"loop_closures", std::move(events)}});
+  store::LoopClosureFilter filter;
+  filter.map = target.text("map");
+  if (!filter.map.empty() && !service_.findMap(filter.map)) {
+    throw ApiError(404, "map_not_found", "no map named '" + filter.map + "'");
+  }
+  filter.robot = target.text("robot");
+  if (!filter.robot.empty() && !validName(filter.robot)) {
+    throw ApiError(400, "invalid_argument", "robot must be 1..64 characters of [A-Za-z0-9._-]");
+  }
+  if (!filter.robot.empty() && !service_.robot(filter.robot)) {
+    throw ApiError(404, "robot_not_found", "no robot with id '" + filter.robot + "'");
+  }
+  filter.source = target.text("source");
+  if (!filter.source.empty() && !parseLoopSource(filter.source)) {
+    throw ApiError(400, "invalid_argument",
+                   "source must be camera, laser_intensity or geometry, not '" + filter.source + "'");
+  }
+  filter.after_id = target.integer("since", 0, 0, INT64_MAX);
+  filter.limit = static_cast<size_t>(target.integer("limit", 1000, 1, 100'000));
+  nlohmann::json closures = nlohmann::json::array();
+  for (const store::LoopClosureRecord& r : service_.store().loopClosures(filter)) {
+    closures.push_back(loopClosureJson(r));
+  }
+  return jsonResponse(request, {{"loop_closures", std::move(closures)}});
 }
 
 }  // namespace rmap::app

@@ -4,6 +4,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "app/bow_recognizer.h"
 #include "app/robot_session.h"
 #include "map3d/map_file.h"
 
@@ -79,10 +80,11 @@ std::vector<std::string> readMapParams(const store::MapRecord& record, map3d::Oc
 
 const char* MappingService::version() { return RMAP_VERSION; }
 
-MappingService::MappingService(Config config)
+MappingService::MappingService(Config config, std::optional<RecognizerFactory> recognizers)
     : config_(std::move(config)),
       viewers_(metrics_, config_.limits.viewer_send_queue_bytes),
-      calibrations_(loadCalibrations(config_.slam2d)) {
+      calibrations_(loadCalibrations(config_.slam2d)),
+      recognizers_(recognizers ? std::move(*recognizers) : bowRecognizers(config_.loop_closure)) {
   store_ = store::Store::open(config_.data_dir);
   loadSlam2dEvents();
   // Event ids are never reused, so the id of this start's event exceeds every earlier epoch.
@@ -155,15 +157,16 @@ std::shared_ptr<MapWorker> MappingService::makeWorker(const store::MapRecord& re
       calibrations_, sensors_,
       [this](const std::string& robot_id, const v1::PoseEstimate& estimate) { sendEstimate(robot_id, estimate); },
       first_input == slam_first_input_.end() ? 0 : first_input->second};
-  auto worker = std::make_shared<MapWorker>(record.name, std::move(map), applied_id, config_, *store_, metrics_,
-                                            [this](const RobotPose& pose) { onPose(pose); }, std::move(slam2d));
+  const auto loop_first = loop_first_input_.find(record.name);
+  MapWorker::LoopInputs loop{recognizers_, [this](const LoopClosure& closure) { onLoopClosure(closure); },
+                             loop_first == loop_first_input_.end() ? 0 : loop_first->second};
+  auto worker =
+      std::make_shared<MapWorker>(record.name, std::move(map), applied_id, config_, *store_, metrics_,
+                                  [this](const RobotPose& pose) { onPose(pose); }, std::move(slam2d), std::move(loop));
   if (recover) {
     store_->forEachMessage(record.name, worker->replayFromId(), [&](const store::StoredMessage& stored) {
-      // Below the snapshot only the 2D SLAM's inputs are replayed.
-      const int32_t kind = stored.record.kind;
-      if (stored.id <= applied_id && kind != v1::RobotMessage::kScan && kind != v1::RobotMessage::kOdometry) {
-        return true;
-      }
+      // Below the snapshot only the inputs of the 2D SLAM and place recognition are replayed.
+      if (stored.id <= applied_id && !worker->replaysBelowSnapshot(stored.record.kind)) return true;
       v1::RobotMessage message;
       if (!message.ParseFromString(stored.record.payload)) {
         spdlog::error("map {}: logged message {} does not parse; skipped", record.name, stored.id);
@@ -338,9 +341,10 @@ void MappingService::loadSlam2dEvents() {
       try {
         if (e.kind == kRobotSensorsEvent) {
           sensors_.addJson(e.json);
-        } else if (e.kind == kSlam2dInputEvent) {
+        } else if (e.kind == kSlam2dInputEvent || e.kind == kLoopInputEvent) {
           const int64_t id = nlohmann::json::parse(e.json).at("message_id").get<int64_t>();
-          auto [it, inserted] = slam_first_input_.try_emplace(e.map, id);
+          auto& first = e.kind == kSlam2dInputEvent ? slam_first_input_ : loop_first_input_;
+          auto [it, inserted] = first.try_emplace(e.map, id);
           if (!inserted) it->second = std::min(it->second, id);
         }
       } catch (const std::exception& ex) {
@@ -378,6 +382,20 @@ void MappingService::onPose(const RobotPose& pose) {
   viewers_.publishPose(pose);
 }
 
+void MappingService::onLoopClosure(const LoopClosure& closure) {
+  store::LoopClosureRecord record = toRecord(closure, nowNs());
+  const std::optional<int64_t> id = store_->appendLoopClosure(record);
+  if (!id) return;  // found again by a replay of the log
+  record.id = *id;
+  metrics_.loop_closures[static_cast<size_t>(closure.source)].fetch_add(1, std::memory_order_relaxed);
+  spdlog::info("map {}: {} loop closure {} between {} at {} ns and {} at {} ns, score {:.3f}", closure.map,
+               toString(closure.source), *id, closure.query.robot_id, closure.query.stamp_ns,
+               closure.match.robot_id, closure.match.stamp_ns, closure.score);
+  nlohmann::json frame = loopClosureJson(record);
+  frame["type"] = "loop_closure";
+  viewers_.publishEvent(closure.map, frame);
+}
+
 void MappingService::tickLoop() {
   auto last_seen_persisted = std::chrono::steady_clock::now();
   std::unique_lock lock(tick_mutex_);
@@ -410,6 +428,7 @@ MetricsGauges MappingService::gauges() const {
   for (const auto& worker : maps()) {
     g.maps += 1;
     g.map_queue_messages += worker->queueDepth();
+    g.loop_queue_frames += worker->loopQueueDepth();
     const map3d::MapStats stats = worker->map().stats();
     g.cuboids += stats.cuboids;
     g.map_memory_bytes += stats.memory_bytes;

@@ -19,6 +19,7 @@
 #include "app/config.h"
 #include "app/map_worker.h"
 #include "app/metrics.h"
+#include "app/place_recognizer.h"
 #include "app/viewer_hub.h"
 #include "store/group_commit.h"
 #include "store/store.h"
@@ -37,8 +38,10 @@ struct RobotStatus {
 class MappingService {
  public:
   /// Opens the store under config.data_dir and recovers the maps.
+  /// @param recognizers  place recognition per map and kind of frame (nullptr from the
+  ///                     factory: that kind is off); by default bowRecognizers(config.loop_closure)
   /// @throws store::StoreError, std::runtime_error with a clear message
-  explicit MappingService(Config config);
+  explicit MappingService(Config config, std::optional<RecognizerFactory> recognizers = std::nullopt);
   /// Stops the tick thread, drains the committer and the workers (final snapshots).
   ~MappingService();
   MappingService(const MappingService&) = delete;
@@ -107,8 +110,11 @@ class MappingService {
   void appliedDone(int64_t log_id);
   RobotStatus status(const store::RobotRecord& record) const;  ///< needs robots_mutex_
   void onPose(const RobotPose& pose);
+  /// Stores a loop closure found by a map (once: replays find it again) and pushes it to viewers.
+  void onLoopClosure(const LoopClosure& closure);
   void sendEstimate(const std::string& robot_id, const v1::PoseEstimate& estimate);
-  /// Reads the robots' declared lasers and the maps' first SLAM inputs from the store's events.
+  /// Reads the robots' declared lasers and the maps' first SLAM and place recognition inputs
+  /// from the store's events.
   void loadSlam2dEvents();
   void tickLoop();
 
@@ -121,6 +127,8 @@ class MappingService {
   RobotSensors sensors_;
   std::mutex declare_mutex_;                        ///< one declareLasers at a time: check, store, record
   std::map<std::string, int64_t> slam_first_input_;  ///< per map, from the store's events at start
+  std::map<std::string, int64_t> loop_first_input_;  ///< per map, from the store's events at start
+  RecognizerFactory recognizers_;
   mutable std::mutex maps_mutex_;
   std::map<std::string, std::shared_ptr<MapWorker>> maps_;
   std::mutex applying_mutex_;

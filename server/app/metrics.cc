@@ -1,5 +1,7 @@
 #include "app/metrics.h"
 
+#include "app/loop_closures.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -85,6 +87,20 @@ std::string renderPrometheus(const Metrics& m, const MetricsGauges& g) {
          load(m.slam2d_scans_refused));
   metric(out, "rmap_pose_estimates_sent_total", "counter", "PoseEstimates sent to robots.",
          load(m.pose_estimates_sent));
+  out += "# HELP rmap_loop_closures_total Loop closures stored, by source.\n# TYPE rmap_loop_closures_total counter\n";
+  for (LoopSource s : {LoopSource::kCamera, LoopSource::kLaserIntensity, LoopSource::kGeometry}) {
+    out += std::string("rmap_loop_closures_total{source=\"") + toString(s) + "\"} " +
+           std::to_string(load(m.loop_closures[static_cast<size_t>(s)])) + "\n";
+  }
+  metric(out, "rmap_loop_frames_total", "counter", "Frames put through place recognition, replayed ones included.",
+         load(m.loop_frames));
+  metric(out, "rmap_loop_frames_refused_total", "counter", "Frames place recognition could not decode.",
+         load(m.loop_frames_refused));
+  metric(out, "rmap_loop_frames_dropped_total", "counter",
+         "Live frames skipped because place recognition was behind (acks never wait for it).",
+         load(m.loop_frames_dropped));
+  metric(out, "rmap_trajectory_corrections_total", "counter",
+         "2D pose graph optimisations applied to trajectories and maps.", load(m.trajectory_corrections));
   metric(out, "rmap_robot_connections", "gauge", "Open robot streams.", g.robot_connections);
   metric(out, "rmap_viewer_connections", "gauge", "Open viewer streams.", g.viewer_connections);
   metric(out, "rmap_http_connections", "gauge", "Open connections (HTTP and WebSocket).", g.http_connections);
@@ -92,6 +108,7 @@ std::string renderPrometheus(const Metrics& m, const MetricsGauges& g) {
   metric(out, "rmap_commit_queue_bytes", "gauge", "Bytes waiting to be made durable.", g.commit_queue_bytes);
   metric(out, "rmap_map_queue_messages", "gauge", "Durable messages waiting to be applied to maps.",
          g.map_queue_messages);
+  metric(out, "rmap_loop_queue_frames", "gauge", "Frames waiting for place recognition.", g.loop_queue_frames);
   metric(out, "rmap_maps", "gauge", "Maps held.", g.maps);
   metric(out, "rmap_map_cuboids", "gauge", "Cuboids over all maps.", g.cuboids);
   metric(out, "rmap_map_memory_bytes", "gauge", "Bytes held by all maps.", g.map_memory_bytes);
@@ -100,6 +117,10 @@ std::string renderPrometheus(const Metrics& m, const MetricsGauges& g) {
   m.http_latency.render("rmap_http_request_seconds", "Time to answer an HTTP request.", out);
   m.slam2d_scan_latency.render("rmap_slam2d_scan_seconds", "Time of one scan in the 2D SLAM (matching, map update).",
                                out);
+  m.loop_frame_latency.render("rmap_loop_frame_seconds", "Time of one frame in place recognition (decoding included).",
+                              out);
+  m.correction_latency.render("rmap_trajectory_correction_seconds",
+                              "Time to store corrected trajectories and re-render the 3D map's planar rows.", out);
   return out;
 }
 

@@ -44,10 +44,18 @@ struct Metrics {
   std::atomic<uint64_t> slam2d_scans{0};          ///< laser scans the 2D SLAM took (replayed ones included)
   std::atomic<uint64_t> slam2d_scans_refused{0};  ///< laser scans the 2D SLAM could not use
   std::atomic<uint64_t> pose_estimates_sent{0};   ///< PoseEstimates queued to robots
+  /// Loop closures stored, indexed by LoopSource.
+  std::array<std::atomic<uint64_t>, 3> loop_closures{};
+  std::atomic<uint64_t> loop_frames{0};          ///< frames put through a place recognizer (replayed ones included)
+  std::atomic<uint64_t> loop_frames_refused{0};  ///< frames that could not be made into a grey image
+  std::atomic<uint64_t> loop_frames_dropped{0};  ///< live frames dropped because place recognition was behind
+  std::atomic<uint64_t> trajectory_corrections{0};  ///< 2D pose graph optimisations applied to trajectories and maps
   LatencyHistogram ack_latency;      ///< frame received → ack queued
   LatencyHistogram apply_latency;    ///< one message applied to its map
   LatencyHistogram http_latency;
   LatencyHistogram slam2d_scan_latency;  ///< one scan through the 2D SLAM (scan matching and map update)
+  LatencyHistogram loop_frame_latency;   ///< one frame through a place recognizer (decoding included)
+  LatencyHistogram correction_latency;   ///< corrected trajectories stored and the 3D map's planar rows re-rendered
 };
 
 /// Gauges read at scrape time.
@@ -58,6 +66,7 @@ struct MetricsGauges {
   uint64_t commit_queue_messages = 0;
   uint64_t commit_queue_bytes = 0;
   uint64_t map_queue_messages = 0;
+  uint64_t loop_queue_frames = 0;
   uint64_t maps = 0;
   uint64_t cuboids = 0;
   uint64_t map_memory_bytes = 0;

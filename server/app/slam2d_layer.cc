@@ -80,7 +80,10 @@ std::optional<Slam2dResult> Slam2dLayer::addScan(const std::string& robot_id, co
   const auto start = std::chrono::steady_clock::now();
   try {
     std::unique_lock lock(mutex_);
+    const uint64_t graph_version = slam_.graphVersion();
     result.base_pose = slam_.addScan(robot_id, result.scan, odometry);
+    result.closures = slam_.takeLoopClosures();
+    result.graph_changed = slam_.graphVersion() != graph_version;
     version_.store(slam_.version());
   } catch (const std::invalid_argument& e) {
     metrics_.slam2d_scans_refused.fetch_add(1, std::memory_order_relaxed);
@@ -97,6 +100,16 @@ std::optional<Slam2dResult> Slam2dLayer::addScan(const std::string& robot_id, co
 
 void Slam2dLayer::addOdometry(const std::string& robot_id, const v1::Odometry& odometry) {
   odometry_[robot_id] = planar(toIsometry(odometry.pose()));
+}
+
+std::vector<slam2d::StampedPose2> Slam2dLayer::trajectory(const std::string& robot_id) const {
+  std::shared_lock lock(mutex_);
+  return slam_.trajectory(robot_id);
+}
+
+cv::Mat Slam2dLayer::reflectivityPatch(const slam2d::Pose2& center, const loop::PatchOptions& options) const {
+  std::shared_lock lock(mutex_);
+  return loop::reflectivityPatch(slam_.grid(), center, options);
 }
 
 double Slam2dLayer::Source::resolutionM() const { return slam_.grid().resolution_m(); }

@@ -15,6 +15,7 @@
 #include "app/layer_tiles.h"
 #include "app/metrics.h"
 #include "app/robot_sensors.h"
+#include "loop/reflectivity_patch.h"
 #include "rmap/v1/robot_stream.pb.h"
 #include "slam2d/intensity_calibration.h"
 #include "slam2d/slam2d.h"
@@ -33,6 +34,9 @@ struct Slam2dResult {
   slam2d::Pose2 base_pose;    ///< robot base in the map frame
   slam2d::Pose2 sensor_pose;  ///< laser in the map frame
   slam2d::LaserScan scan;     ///< the scan as the SLAM took it (sensor frame)
+  std::vector<slam2d::LoopClosure2d> closures;  ///< geometric loop closures accepted with this scan
+  /// The pose graph moved poses: trajectory() and the grid are corrected.
+  bool graph_changed = false;
 };
 
 class Slam2dLayer {
@@ -54,6 +58,12 @@ class Slam2dLayer {
   /// Changes whenever the grid changed (the SLAM's map version).
   uint64_t version() const { return version_.load(); }
   uint64_t scans() const { return scans_.load(); }
+
+  /// Every scan's corrected robot pose of a trajectory, in scan order (see slam2d::Slam2d::trajectory).
+  std::vector<slam2d::StampedPose2> trajectory(const std::string& robot_id) const;
+
+  /// The reflectivity patch around a pose (place recognition of 2D-laser robots), under the shared lock.
+  cv::Mat reflectivityPatch(const slam2d::Pose2& center, const loop::PatchOptions& options) const;
 
   /// Runs fn(const Grid2dSource&) under the shared lock and returns its result.
   template <typename Fn>

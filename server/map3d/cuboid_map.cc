@@ -314,6 +314,60 @@ void CuboidMap::setCuboids(std::span<const CuboidBox> boxes) {
   fuseBlocks(std::vector<Block*>(hot_), 1);
 }
 
+void CuboidMap::rewriteCells(const CellKey& min, const CellKey& max,
+                             const std::function<std::optional<float>(const CellKey&)>& value) {
+  if (!cellInRange(min) || !cellInRange(max) || min.x > max.x || min.y > max.y || min.z > max.z) {
+    throw std::invalid_argument("rewriteCells: range outside the addressable cells or inverted");
+  }
+  // Values first, block by block, so a bad one leaves the map unchanged and the lock is short.
+  struct BlockValues {
+    BlockKey key;
+    std::vector<std::pair<int, std::optional<float>>> cells;  ///< local index, value
+    bool any_known = false;
+  };
+  std::vector<BlockValues> blocks;
+  const BlockKey bmin = blockOf(min), bmax = blockOf(max);
+  for (int32_t bz = bmin.z; bz <= bmax.z; ++bz) {
+    for (int32_t by = bmin.y; by <= bmax.y; ++by) {
+      for (int32_t bx = bmin.x; bx <= bmax.x; ++bx) {
+        BlockValues& b = blocks.emplace_back();
+        b.key = {bx, by, bz};
+        const CellKey base{bx << kBlockShift, by << kBlockShift, bz << kBlockShift};
+        for (int32_t z = std::max(min.z, base.z); z <= std::min(max.z, base.z + kBlockEdge - 1); ++z) {
+          for (int32_t y = std::max(min.y, base.y); y <= std::min(max.y, base.y + kBlockEdge - 1); ++y) {
+            for (int32_t x = std::max(min.x, base.x); x <= std::min(max.x, base.x + kBlockEdge - 1); ++x) {
+              const CellKey cell{x, y, z};
+              const std::optional<float> v = value(cell);
+              if (v && !std::isfinite(*v)) throw std::invalid_argument("rewriteCells: non-finite log-odds");
+              b.any_known = b.any_known || v.has_value();
+              b.cells.emplace_back(localIndex(cell), v);
+            }
+          }
+        }
+      }
+    }
+  }
+  std::unique_lock lock(mutex_);
+  ++version_;
+  const float lo = occupancy_.clamp_min_log_odds, hi = occupancy_.clamp_max_log_odds;
+  std::vector<Block*> touched;
+  for (const BlockValues& b : blocks) {
+    if (!b.any_known && !blocks_.contains(b.key)) continue;
+    Block& block = blockForWrite(b.key);
+    for (const auto& [i, v] : b.cells) {
+      if (v) {
+        block.dense->log_odds[i] = std::clamp(*v, lo, hi);
+        block.dense->known.set(i);
+      } else {
+        block.dense->known.reset(i);
+      }
+    }
+    block.version = version_;
+    touched.push_back(&block);
+  }
+  fuseBlocks(touched, 1);
+}
+
 // ---------------------------------------------------------------- reading
 
 CellQuery CuboidMap::query(const Eigen::Vector3d& point_m) const {

@@ -21,6 +21,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <shared_mutex>
 #include <span>
 #include <unordered_map>
@@ -157,6 +158,17 @@ class CuboidMap {
   /// with what the touched blocks held. Boxes must be addressable.
   /// @throws std::invalid_argument, map unchanged
   void setCuboids(std::span<const CuboidBox> boxes);
+
+  /// Rewrites every cell of the inclusive range [min, max] with value(cell):
+  /// a log-odds (clamped to the map's limits) or nullopt for unknown (the
+  /// cell's evidence is erased). For content derived elsewhere and put in
+  /// again, e.g. the planar rows of corrected 2D scans. Touched blocks are
+  /// fused at once; blocks that would hold nothing known are not created.
+  /// Cost O(cells in the range).
+  /// @throws std::invalid_argument (map unchanged) for a range outside the
+  ///         addressable cells, inverted, or a non-finite value
+  void rewriteCells(const CellKey& min, const CellKey& max,
+                    const std::function<std::optional<float>(const CellKey&)>& value);
 
   /// Cell range of all known cells; false when the map is empty.
   bool bounds(CellKey& min, CellKey& max) const;

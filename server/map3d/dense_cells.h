@@ -18,6 +18,7 @@ struct BlockBits {
   std::array<uint64_t, kBlockWords> words{};
 
   void set(int i) { words[i >> 6] |= uint64_t{1} << (i & 63); }
+  void reset(int i) { words[i >> 6] &= ~(uint64_t{1} << (i & 63)); }
   bool test(int i) const { return (words[i >> 6] >> (i & 63)) & 1u; }
   bool any() const {
     for (uint64_t w : words) {

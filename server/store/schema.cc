@@ -1,5 +1,6 @@
 #include "store/schema.h"
 
+#include <iterator>
 #include <string>
 
 namespace rmap::store {
@@ -7,7 +8,8 @@ namespace {
 
 // Integers that are uint64_t in the API (seq, last_seq) are stored as SQLite's
 // signed 64-bit INTEGER; the store keeps them below 2^63 so they sort right.
-constexpr const char* kCreateTables = R"sql(
+// Version 1: the tables every database has.
+constexpr const char* kVersion1Tables = R"sql(
 CREATE TABLE maps (
   name         TEXT PRIMARY KEY,
   resolution_m REAL NOT NULL,
@@ -66,6 +68,28 @@ CREATE TABLE snapshots (
 );
 )sql";
 
+// Version 2: loop closures. The unique key is what makes a replay of the log, which finds
+// the same closures again, store nothing twice.
+constexpr const char* kVersion2Tables = R"sql(
+CREATE TABLE loop_closures (
+  id             INTEGER PRIMARY KEY AUTOINCREMENT,  -- a cursor for clients: never reused
+  map            TEXT NOT NULL,
+  source         TEXT NOT NULL,
+  query_robot    TEXT NOT NULL,
+  query_stamp_ns INTEGER NOT NULL,
+  match_robot    TEXT NOT NULL,
+  match_stamp_ns INTEGER NOT NULL,
+  detected_ns    INTEGER NOT NULL,
+  json           TEXT NOT NULL,
+  UNIQUE (map, source, query_robot, query_stamp_ns, match_robot, match_stamp_ns)
+);
+CREATE INDEX loop_closures_by_map ON loop_closures (map, id);
+)sql";
+
+/// Tables added by each version, in order: a database at version v gets those after v.
+constexpr const char* kMigrations[] = {kVersion1Tables, kVersion2Tables};
+static_assert(std::size(kMigrations) == kSchemaVersion);
+
 int userVersion(Connection& connection) {
   Statement query(connection, "PRAGMA user_version", "read schema version");
   query.step();
@@ -83,7 +107,7 @@ void prepareSchema(Connection& writer) {
                      ", newer than version " + std::to_string(kSchemaVersion) +
                      " supported by this rmapd; run a newer rmapd or another data directory");
   if (version == kSchemaVersion) return;  // the transaction only read: its rollback changes nothing
-  writer.exec(kCreateTables, kOperation);
+  for (int v = version; v < kSchemaVersion; ++v) writer.exec(kMigrations[v], kOperation);
   writer.exec("PRAGMA user_version = " + std::to_string(kSchemaVersion), kOperation);
   transaction.commit();
 }

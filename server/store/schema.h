@@ -8,10 +8,10 @@
 namespace rmap::store {
 
 /// Version of the schema this build reads and writes.
-inline constexpr int kSchemaVersion = 1;
+inline constexpr int kSchemaVersion = 2;
 
-/// Creates the tables in a new database, or checks that an existing one has
-/// a schema this build understands.
+/// Creates the tables in a new database, upgrades an older one in place, or
+/// checks that an existing one has a schema this build understands.
 /// @throws StoreError when the database was written by a newer rmapd
 void prepareSchema(Connection& writer);
 

@@ -75,6 +75,15 @@ constexpr std::string_view kEventsOfMap =
 constexpr std::string_view kEventsOfAllMaps =
     "SELECT id, map, kind, stamp_ns, json FROM events WHERE id > ?2 ORDER BY id LIMIT ?3";
 
+constexpr std::string_view kInsertLoopClosure =
+    "INSERT INTO loop_closures (map, source, query_robot, query_stamp_ns, match_robot, match_stamp_ns, detected_ns, "
+    "json) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8) ON CONFLICT DO NOTHING";
+// Empty filter values match everything; the robot is on either side.
+constexpr std::string_view kLoopClosures =
+    "SELECT id, map, source, query_robot, query_stamp_ns, match_robot, match_stamp_ns, detected_ns, json "
+    "FROM loop_closures WHERE (?1 = '' OR map = ?1) AND (?2 = '' OR query_robot = ?2 OR match_robot = ?2) "
+    "AND (?3 = '' OR source = ?3) AND id > ?4 ORDER BY id LIMIT ?5";
+
 constexpr std::string_view kPutSnapshot =
     "INSERT INTO snapshots (map, last_message_id, blob) VALUES (?1, ?2, ?3) "
     "ON CONFLICT (map) DO UPDATE SET last_message_id = excluded.last_message_id, blob = excluded.blob";
@@ -317,6 +326,39 @@ class SqliteStore final : public Store {
       events.push_back({query.int64At(0), std::string(query.textAt(1)), std::string(query.textAt(2)),
                         query.int64At(3), std::string(query.textAt(4))});
     return events;
+  }
+
+  std::optional<int64_t> appendLoopClosure(const LoopClosureRecord& c) override {
+    auto lock = write_gate_.lockWriter();
+    Statement insert(writer_, kInsertLoopClosure, "append loop closure");
+    insert.bindText(1, c.map);
+    insert.bindText(2, c.source);
+    insert.bindText(3, c.query_robot);
+    insert.bind(4, c.query_stamp_ns);
+    insert.bindText(5, c.match_robot);
+    insert.bind(6, c.match_stamp_ns);
+    insert.bind(7, c.detected_ns);
+    insert.bindText(8, c.json);
+    insert.step();
+    if (sqlite3_changes(writer_.handle()) == 0) return std::nullopt;
+    return sqlite3_last_insert_rowid(writer_.handle());
+  }
+
+  std::vector<LoopClosureRecord> loopClosures(const LoopClosureFilter& filter) const override {
+    const ReaderPool::Lease reader = readers_.acquire();
+    Statement query(*reader, kLoopClosures, "read loop closures");
+    query.bindText(1, filter.map);
+    query.bindText(2, filter.robot);
+    query.bindText(3, filter.source);
+    query.bind(4, filter.after_id);
+    query.bind(5, sqlLimit(filter.limit));
+    std::vector<LoopClosureRecord> out;
+    while (query.step()) {
+      out.push_back({query.int64At(0), std::string(query.textAt(1)), std::string(query.textAt(2)),
+                     std::string(query.textAt(3)), query.int64At(4), std::string(query.textAt(5)),
+                     query.int64At(6), query.int64At(7), std::string(query.textAt(8))});
+    }
+    return out;
   }
 
   void putSnapshot(const Snapshot& snapshot) override {

@@ -95,6 +95,29 @@ struct EventRecord {
   std::string json;  ///< event body
 };
 
+/// A loop closure as the store keeps it: the fields it is filtered and
+/// deduplicated by, and a body the app wrote (poses, score).
+struct LoopClosureRecord {
+  int64_t id = 0;  ///< assigned by the store, increasing, never reused (a cursor for clients)
+  std::string map;
+  std::string source;  ///< what found it, e.g. "camera"
+  std::string query_robot;
+  int64_t query_stamp_ns = 0;
+  std::string match_robot;
+  int64_t match_stamp_ns = 0;
+  int64_t detected_ns = 0;  ///< wall clock of the first detection
+  std::string json;         ///< body, opaque here
+};
+
+/// Which loop closures to read; empty strings match everything.
+struct LoopClosureFilter {
+  std::string map;
+  std::string robot;   ///< either side of the closure
+  std::string source;
+  int64_t after_id = 0;
+  size_t limit = 1000;
+};
+
 struct Snapshot {
   std::string map;
   int64_t last_message_id = 0;  ///< log messages with id <= this are in the blob
@@ -141,6 +164,14 @@ class Store {
   virtual int64_t appendEvent(const EventRecord& event) = 0;
   /// Events with id > after_id (of `map`, or all maps when empty), in id order, at most `limit`.
   virtual std::vector<EventRecord> events(const std::string& map, int64_t after_id, size_t limit) const = 0;
+
+  /// Stores a loop closure unless one with the same map, source, query robot
+  /// and stamp, and match robot and stamp is stored already (a replay of the
+  /// log finds the same closures again). Durable on return.
+  /// @return its id; nullopt when it was stored before (nothing written)
+  virtual std::optional<int64_t> appendLoopClosure(const LoopClosureRecord& closure) = 0;
+  /// Loop closures matching `filter` with id > after_id, in id order, at most `limit`.
+  virtual std::vector<LoopClosureRecord> loopClosures(const LoopClosureFilter& filter) const = 0;
 
   /// Replaces the map's snapshot.
   virtual void putSnapshot(const Snapshot& snapshot) = 0;

@@ -75,3 +75,12 @@ export function cuboidColor(tile, k, mode, zLo, zHi, r, out, o) {
   const zc = 0.5 * (tile.minCell[3 * k + 2] + tile.maxCell[3 * k + 2] + 1) * r;
   rampAt(HEIGHT_RAMP, zHi > zLo ? (zc - zLo) / (zHi - zLo) : 0.5, out, o);
 }
+
+// Loop closures by the source that found them (GET /v1/loop-closures `source`), CSS colours.
+export const LOOP_COLORS = { camera: '#ffd54a', laser_intensity: '#ff4df0', geometry: '#4dd0ff' };
+export const LOOP_FALLBACK_COLOR = '#ffffff';
+
+/** Colour of a loop closure's line: its source's, white for an unknown source. */
+export function loopColor(source) {
+  return LOOP_COLORS[source] || LOOP_FALLBACK_COLOR;
+}

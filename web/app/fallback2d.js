@@ -2,7 +2,7 @@
 // cuboids drawn lowest first and coloured like the 3D view, robots, trajectories and loop
 // closures on top. Drag to pan, wheel to zoom. Same interface as Renderer3D.
 
-import { cuboidColor } from './colors.js';
+import { cuboidColor, loopColor } from './colors.js';
 import { pickTiles } from './scene3d.js';
 
 const BACKGROUND = '#12161c';
@@ -195,7 +195,8 @@ export class Renderer2D {
       }
     }
     for (const lc of this.loops) {
-      ctx.strokeStyle = lc.fresh ? '#ff4df0' : '#ffd54a';
+      ctx.strokeStyle = loopColor(lc.source);
+      ctx.lineWidth = lc.fresh ? 2 : 1;
       ctx.beginPath();
       ctx.moveTo(this.sx(lc.a[0]), this.sy(lc.a[1]));
       ctx.lineTo(this.sx(lc.b[0]), this.sy(lc.b[1]));
@@ -295,6 +296,13 @@ export class Renderer2D {
 
   removeRobot(id) { this.robots.delete(id); this.requestRender(); }
   setLoopClosures(list) { this.loops = list; this.requestRender(); }
+
+  /** Loop closure lines drawn, by colour: {'#4dd0ff': 3, …}. */
+  loopLineCounts() {
+    const out = {};
+    for (const lc of this.loops) out[loopColor(lc.source)] = (out[loopColor(lc.source)] || 0) + 1;
+    return out;
+  }
 
   pick(clientX, clientY) {
     const [x, y] = this.toWorld(clientX, clientY);

@@ -5,7 +5,7 @@
 // A read-only hook for tests and scripts: window.rmapViewer (see the bottom of this file).
 
 import { Api, ApiError } from './api.js';
-import { ROBOT_COLORS } from './colors.js';
+import { ROBOT_COLORS, loopColor } from './colors.js';
 import { Renderer2D } from './fallback2d.js';
 import { Layers2D } from './layers2d.js';
 import { Renderer3D, webglAvailable } from './scene3d.js';
@@ -360,6 +360,25 @@ async function loadTrajectory(r) {
   }
 }
 
+// A geometric loop closure comes with a pose graph correction: the robots' trajectories the
+// server keeps change, so they are read again, once per burst of closures (the server writes
+// corrected poses within half a second).
+const reloadRobots = new Set();
+let reloadTimer = null;
+
+function reloadTrajectoriesOf(ids) {
+  for (const id of ids) if (id) reloadRobots.add(id);
+  if (reloadTimer) return;
+  reloadTimer = setTimeout(() => {
+    reloadTimer = null;
+    for (const id of reloadRobots) {
+      const r = state.robots.get(id);
+      if (r) loadTrajectory(r);
+    }
+    reloadRobots.clear();
+  }, 1000);
+}
+
 function appendTrajectory(r, poses) {
   const fresh = poses.filter((p) => p.stamp_ns > r.traj.stamp);
   if (!fresh.length) return;
@@ -426,12 +445,15 @@ function addLoopClosures(events, fresh) {
     if (state.loopIds.has(id)) continue;
     state.loopIds.add(id);
     const ends = endsOf(e);
-    state.loops.push({ id, event: e, a: ends && ends[0], b: ends && ends[1], fresh, at: Date.now() });
+    state.loops.push({ id, event: e, a: ends && ends[0], b: ends && ends[1], source: e.source, fresh,
+      at: Date.now() });
     changed = true;
   }
   if (!changed) return;
   renderLoops();
   if (fresh) {
+    const corrected = events.filter((e) => e.source === 'geometry');
+    if (corrected.length) reloadTrajectoriesOf(corrected.flatMap((e) => [e.query?.robot_id, e.match?.robot_id]));
     setTimeout(() => {
       for (const lc of state.loops) lc.fresh = false;
       renderLoops();
@@ -446,12 +468,17 @@ function renderLoops() {
     if (lc.fresh) li.classList.add('fresh');
     const name = document.createElement('span');
     name.className = 'name';
-    const robots = [lc.event.robot_id, lc.event.robot_a, lc.event.robot_b].filter(Boolean).join(' ↔ ');
+    const robots = [lc.event.query?.robot_id, lc.event.match?.robot_id].filter(Boolean).join(' ↔ ');
     name.textContent = `#${lc.id}${robots ? ` ${robots}` : ''}`;
+    const source = document.createElement('span');
+    source.className = 'loop-source';
+    source.style.color = loopColor(lc.source);
+    source.textContent = lc.source || '';
     const when = document.createElement('span');
     when.className = 'num';
-    when.textContent = lc.event.stamp_ns ? new Date(lc.event.stamp_ns / 1e6).toLocaleTimeString() : '';
-    li.append(name, when);
+    const stamp = lc.event.query?.stamp_ns ?? lc.event.detected_ns;
+    when.textContent = stamp ? new Date(stamp / 1e6).toLocaleTimeString() : '';
+    li.append(name, source, when);
     return li;
   });
   $('loops').replaceChildren(...items);
@@ -828,6 +855,7 @@ window.rmapViewer = Object.freeze({
   lastQuery: () => copy(state.lastQuery),
   lastBox: () => copy(state.lastBox),
   loopClosures: () => copy(state.loops.map((lc) => lc.event)),
+  loopLines: () => renderer.loopLineCounts(),
   query: (x, y, z) => api.json(occupancyUrl(x, y, z)),
   timings: () => ({ ...state.timings }),
   layers: () => ({ available: state.layersAvailable, version: state.layersVersion ?? null,

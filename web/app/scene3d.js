@@ -6,7 +6,7 @@
 import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 
-import { cuboidColor } from './colors.js';
+import { cuboidColor, loopColor } from './colors.js';
 import { cuboidMaterial, threeFaceBoxGeometry } from './cuboid_material.js';
 import { InstanceLayer } from './instances.js';
 import { TILE_CELLS } from './tiles.js';
@@ -570,31 +570,46 @@ export class Renderer3D {
     this.requestRender('data');
   }
 
-  /** Loop closures: [{a:[x,y,z], b:[x,y,z], fresh:boolean}]. */
+  /**
+   * Loop closures: [{a:[x,y,z], b:[x,y,z], source, fresh:boolean}], a line between the two poses
+   * in its source's colour (colors.js), fresh ones drawn on top.
+   */
   setLoopClosures(list) {
     for (const child of [...this.loopGroup.children]) {
       this.loopGroup.remove(child);
       child.geometry.dispose();
       child.material.dispose();
     }
-    if (list.length === 0) {
-      this.requestRender('data');
-      return;
+    const groups = new Map();
+    for (const lc of list) {
+      const key = `${loopColor(lc.source)}|${lc.fresh ? 1 : 0}`;
+      if (!groups.has(key)) groups.set(key, []);
+      groups.get(key).push(lc);
     }
-    const make = (items, color, width) => {
+    for (const [key, items] of groups) {
+      const [color, fresh] = key.split('|');
       const flat = new Float32Array(items.length * 6);
       items.forEach((lc, i) => flat.set([...lc.a, ...lc.b], 6 * i));
       const g = new THREE.BufferGeometry();
       g.setAttribute('position', new THREE.BufferAttribute(flat, 3));
-      const lines = new THREE.LineSegments(g, new THREE.LineBasicMaterial({ color, linewidth: width, depthTest: false }));
-      lines.renderOrder = 6;
+      const material = new THREE.LineBasicMaterial({ color: new THREE.Color(color), depthTest: false,
+        transparent: fresh !== '1', opacity: fresh === '1' ? 1 : 0.8 });
+      const lines = new THREE.LineSegments(g, material);
+      lines.renderOrder = fresh === '1' ? 7 : 6;
+      lines.frustumCulled = false;
       this.loopGroup.add(lines);
-    };
-    const old = list.filter((lc) => !lc.fresh);
-    const fresh = list.filter((lc) => lc.fresh);
-    if (old.length) make(old, 0xffd54a, 1);
-    if (fresh.length) make(fresh, 0xff4df0, 2);
+    }
     this.requestRender('data');
+  }
+
+  /** Loop closure lines drawn, by colour: {'#4dd0ff': 3, …}. */
+  loopLineCounts() {
+    const out = {};
+    for (const child of this.loopGroup.children) {
+      const key = `#${child.material.color.getHexString()}`;
+      out[key] = (out[key] || 0) + child.geometry.getAttribute('position').count / 2;
+    }
+    return out;
   }
 
   // ----- picking -----

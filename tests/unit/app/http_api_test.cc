@@ -5,6 +5,7 @@
 #include <boost/beast/http/field.hpp>
 #include <nlohmann/json.hpp>
 
+#include "app/loop_closures.h"
 #include "service_test_support.h"
 
 namespace rmap::app {
@@ -75,29 +76,74 @@ TEST_F(HttpApiTest, InternalErrorsAreGenericAndKeepTheDetailOutOfTheResponse) {
   EXPECT_EQ(response.body().find("parse"), std::string::npos) << response.body();
 }
 
-TEST_F(HttpApiTest, LoopClosuresAreFilteredBeforeTheLimit) {
+TEST_F(HttpApiTest, LoopClosuresAreFilteredByMapRobotSourceAndCursor) {
   service_.openMap("lab", 0.0);
   service_.openMap("hall", 0.0);
   store::Store& store = service_.store();
-  std::vector<int64_t> loop_ids;
-  for (int i = 0; i < 12; ++i) {
-    const bool loop = i % 4 == 3;  // 3 of 12, each after three other events
-    const int64_t id = store.appendEvent({0, i == 11 ? "hall" : "lab", loop ? "loop_closure" : "note", i, "{}"});
-    if (loop) loop_ids.push_back(id);
-  }
+  for (const char* robot : {"r1", "r2", "r3"}) store.upsertRobot({robot, "lab", "[]", 1, 1, 0});
+  const auto add = [&](const std::string& map, LoopSource source, const std::string& q, const std::string& m,
+                       int64_t stamp) {
+    LoopClosure c{map, source, {q, stamp, std::nullopt}, {m, stamp - 5, Eigen::Isometry3d::Identity()}, 0.75};
+    c.query.pose = Eigen::Isometry3d(Eigen::Translation3d(1.0, 2.0, 0.5));
+    return *store.appendLoopClosure(toRecord(c, 42));
+  };
+  const int64_t a = add("lab", LoopSource::kCamera, "r1", "r2", 100);
+  const int64_t b = add("lab", LoopSource::kGeometry, "r2", "r2", 200);
+  const int64_t c = add("hall", LoopSource::kLaserIntensity, "r3", "r1", 300);
   const auto ids = [&](const std::string& target) {
     std::vector<int64_t> out;
-    const json body = json::parse(get(target).body());
+    const net::Response response = get(target);
+    EXPECT_EQ(response.result_int(), 200) << target << " " << response.body();
+    const json body = json::parse(response.body());
     for (const json& e : body.at("loop_closures")) out.push_back(e.at("id").get<int64_t>());
     return out;
   };
-  EXPECT_EQ(ids("/v1/loop-closures?limit=2"), (std::vector<int64_t>{loop_ids[0], loop_ids[1]}));
-  EXPECT_EQ(ids("/v1/loop-closures?limit=2&since=" + std::to_string(loop_ids[1])),
-            (std::vector<int64_t>{loop_ids[2]}));
-  EXPECT_EQ(ids("/v1/loop-closures?limit=1&map=lab&since=" + std::to_string(loop_ids[0])),
-            (std::vector<int64_t>{loop_ids[1]}));
-  EXPECT_EQ(ids("/v1/loop-closures?limit=1&map=hall"), (std::vector<int64_t>{loop_ids[2]}));
-  EXPECT_EQ(ids("/v1/loop-closures?limit=100"), loop_ids);
+  EXPECT_EQ(ids("/v1/loop-closures"), (std::vector<int64_t>{a, b, c}));
+  EXPECT_EQ(ids("/v1/loop-closures?map=lab"), (std::vector<int64_t>{a, b}));
+  EXPECT_EQ(ids("/v1/loop-closures?robot=r1"), (std::vector<int64_t>{a, c}));
+  EXPECT_EQ(ids("/v1/loop-closures?source=geometry"), (std::vector<int64_t>{b}));
+  EXPECT_EQ(ids("/v1/loop-closures?map=lab&robot=r2&since=" + std::to_string(a)), (std::vector<int64_t>{b}));
+  EXPECT_EQ(ids("/v1/loop-closures?limit=2"), (std::vector<int64_t>{a, b}));
+
+  const json first = json::parse(get("/v1/loop-closures?limit=1").body()).at("loop_closures").at(0);
+  EXPECT_EQ(first.at("map"), "lab");
+  EXPECT_EQ(first.at("source"), "camera");
+  EXPECT_EQ(first.at("score"), 0.75);
+  EXPECT_EQ(first.at("detected_ns"), 42);
+  EXPECT_EQ(first.at("query").at("robot_id"), "r1");
+  EXPECT_EQ(first.at("query").at("stamp_ns"), 100);
+  EXPECT_EQ(first.at("query").at("position"), json::parse("[1.0, 2.0, 0.5]"));
+  EXPECT_EQ(first.at("query").at("orientation"), json::parse("[1.0, 0.0, 0.0, 0.0]"));
+  EXPECT_EQ(first.at("match").at("robot_id"), "r2");
+  EXPECT_EQ(first.at("match").at("stamp_ns"), 95);
+}
+
+TEST_F(HttpApiTest, LoopClosureQueriesWithBadParametersAreRefused) {
+  service_.openMap("lab", 0.0);
+  const struct {
+    std::string target;
+    int status;
+    std::string code;
+    std::string says;
+  } cases[] = {
+      {"/v1/loop-closures?source=lidar", 400, "invalid_argument", "source must be"},
+      {"/v1/loop-closures?since=-1", 400, "invalid_argument", "since"},
+      {"/v1/loop-closures?since=abc", 400, "invalid_argument", "since"},
+      {"/v1/loop-closures?limit=0", 400, "invalid_argument", "limit"},
+      {"/v1/loop-closures?limit=100001", 400, "invalid_argument", "limit"},
+      {"/v1/loop-closures?robot=bad%20id", 400, "invalid_argument", "robot"},
+      {"/v1/loop-closures?robot_id=r1", 400, "invalid_argument", "unknown query parameter 'robot_id'"},
+      {"/v1/loop-closures?map=nowhere", 404, "map_not_found", "nowhere"},
+      {"/v1/loop-closures?robot=ghost", 404, "robot_not_found", "ghost"},
+  };
+  for (const auto& c : cases) {
+    const net::Response response = get(c.target);
+    EXPECT_EQ(response.result_int(), c.status) << c.target;
+    const json body = json::parse(response.body());
+    EXPECT_EQ(body["error"]["code"], c.code) << c.target;
+    EXPECT_NE(body["error"]["message"].get<std::string>().find(c.says), std::string::npos)
+        << c.target << ": " << body.dump();
+  }
 }
 
 TEST_F(HttpApiTest, MetricsReportOpenConnections) {

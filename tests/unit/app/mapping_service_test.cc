@@ -5,6 +5,7 @@
 #include <future>
 #include <nlohmann/json.hpp>
 
+#include "same_grey_recognizer.h"
 #include "service_test_support.h"
 
 namespace rmap::app {
@@ -140,6 +141,67 @@ TEST(MappingService, StopsItsWorkersEvenWhenSessionsStillHoldThem) {
   ASSERT_TRUE(snapshot);
   EXPECT_EQ(snapshot->last_message_id, 1);
   held.reset();
+}
+
+/// A MONO8 camera image of one grey, with a camera pose at (x, 0, 0).
+v1::RobotMessage greyImage(uint64_t seq, uint8_t grey, double x) {
+  v1::RobotMessage m;
+  m.set_seq(seq);
+  v1::CameraImage& image = *m.mutable_image();
+  image.set_stamp_ns(static_cast<int64_t>(seq) * 1000);
+  image.set_encoding(v1::CameraImage::MONO8);
+  image.set_width(32);
+  image.set_height(32);
+  image.set_data(std::string(32 * 32, static_cast<char>(grey)));
+  image.mutable_camera_pose()->mutable_position_m()->set_x(x);
+  return m;
+}
+
+TEST(MappingService, CameraLoopClosuresAreStoredOnceAcrossReplaysOfTheLog) {
+  store::TempDir dir;
+  const RecognizerFactory recognizers = [](FrameKind kind) -> std::unique_ptr<PlaceRecognizer> {
+    if (kind != FrameKind::kCamera) return nullptr;
+    return std::make_unique<testing::SameGreyRecognizer>();
+  };
+  {
+    MappingService service(testing::configIn(dir.path()), recognizers);
+    const std::shared_ptr<MapWorker> map = service.openMap("lab", 0.0);
+    const uint8_t greys[] = {10, 20, 30, 10};  // the fourth image is the first place again
+    for (uint64_t seq = 1; seq <= 4; ++seq) {
+      const v1::RobotMessage image = greyImage(seq, greys[seq - 1], static_cast<double>(seq));
+      logMessage(service.store(), image);
+      service.apply(*map, static_cast<int64_t>(seq), std::make_shared<v1::RobotMessage>(image), "bot", nullptr);
+    }
+    std::promise<void> applied;
+    service.whenApplied(4, [&] { applied.set_value(); });
+    applied.get_future().wait();
+    map->drainLoopClosures();
+    EXPECT_EQ(service.metrics().loop_closures[static_cast<size_t>(LoopSource::kCamera)].load(), 1u);
+    EXPECT_EQ(service.metrics().loop_frames.load(), 4u);
+  }
+  const auto stored = [&](store::Store& store) { return store.loopClosures({"lab", "", "camera", 0, 100}); };
+  {
+    // Restarted: the images are replayed from the first one (below the snapshot too) and find the
+    // same closure, which is not stored again.
+    MappingService service(testing::configIn(dir.path()), recognizers);
+    service.findMap("lab")->drainLoopClosures();
+    EXPECT_EQ(service.metrics().loop_frames.load(), 4u);
+    EXPECT_EQ(service.metrics().loop_closures[static_cast<size_t>(LoopSource::kCamera)].load(), 0u);
+    const std::vector<store::LoopClosureRecord> closures = stored(service.store());
+    ASSERT_EQ(closures.size(), 1u);
+    EXPECT_EQ(closures[0].query_robot, "bot");
+    EXPECT_EQ(closures[0].query_stamp_ns, 4000);
+    EXPECT_EQ(closures[0].match_stamp_ns, 1000);
+    const nlohmann::json json = loopClosureJson(closures[0]);
+    EXPECT_EQ(json.at("query").at("position"), nlohmann::json::parse("[4.0, 0.0, 0.0]"));
+    EXPECT_EQ(json.at("match").at("position"), nlohmann::json::parse("[1.0, 0.0, 0.0]"));
+  }
+  {
+    // Without place recognition nothing below the snapshot is replayed for it.
+    MappingService service(testing::configIn(dir.path()), RecognizerFactory{});
+    EXPECT_EQ(service.metrics().messages_recovered.load(), 0u);
+    EXPECT_EQ(stored(service.store()).size(), 1u);
+  }
 }
 
 TEST(MappingService, GaugesReadTheConnectionCounter) {

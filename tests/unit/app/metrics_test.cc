@@ -1,5 +1,7 @@
 #include "app/metrics.h"
 
+#include "app/loop_closures.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -110,13 +112,24 @@ TEST(RenderPrometheus, IncludesTheLatencyHistograms) {
   EXPECT_TRUE(hasLine(out, "rmap_ack_latency_seconds_sum 0.003906250")) << out;
 }
 
+TEST(RenderPrometheus, LoopClosuresAreCountedBySource) {
+  Metrics m;
+  m.loop_closures[static_cast<size_t>(LoopSource::kGeometry)] = 3;
+  m.loop_closures[static_cast<size_t>(LoopSource::kCamera)] = 1;
+  const std::string out = renderPrometheus(m, MetricsGauges{});
+  EXPECT_TRUE(hasLine(out, "# TYPE rmap_loop_closures_total counter")) << out;
+  EXPECT_TRUE(hasLine(out, "rmap_loop_closures_total{source=\"camera\"} 1")) << out;
+  EXPECT_TRUE(hasLine(out, "rmap_loop_closures_total{source=\"laser_intensity\"} 0")) << out;
+  EXPECT_TRUE(hasLine(out, "rmap_loop_closures_total{source=\"geometry\"} 3")) << out;
+}
+
 TEST(RenderPrometheus, EveryMetricHasOneHelpAndOneTypeLine) {
   const std::string out = renderPrometheus(Metrics{}, MetricsGauges{});
   size_t help = 0, type = 0;
   for (size_t at = out.find("# HELP "); at != std::string::npos; at = out.find("# HELP ", at + 1)) ++help;
   for (size_t at = out.find("# TYPE "); at != std::string::npos; at = out.find("# TYPE ", at + 1)) ++type;
   EXPECT_EQ(help, type);
-  EXPECT_EQ(help, 16u + 9u + 4u);  // counters, gauges, histograms
+  EXPECT_EQ(help, 21u + 10u + 6u);  // counters, gauges, histograms
 }
 
 }  // namespace

@@ -51,6 +51,8 @@ class NullStore : public store::Store {
   std::vector<store::TrajectoryPose> trajectory(const std::string&, int64_t, size_t) const override { return {}; }
   int64_t appendEvent(const store::EventRecord&) override { return 1; }
   std::vector<store::EventRecord> events(const std::string&, int64_t, size_t) const override { return {}; }
+  std::optional<int64_t> appendLoopClosure(const store::LoopClosureRecord&) override { return 1; }
+  std::vector<store::LoopClosureRecord> loopClosures(const store::LoopClosureFilter&) const override { return {}; }
   void putSnapshot(const store::Snapshot&) override {}
   std::optional<store::Snapshot> snapshot(const std::string&) const override { return std::nullopt; }
 };
@@ -190,9 +192,11 @@ TEST_F(ViewerHubTest, TickSendsTileChangesOfAMapWorkerOnce) {
   NullStore store;
   const RobotSensors sensors;
   const Calibrations calibrations;
+  const RecognizerFactory no_recognition;
   auto worker = std::make_shared<MapWorker>("lab", std::make_unique<map3d::CuboidMap>(0.1), 0, config, store,
                                             metrics_, [&](const RobotPose& p) { hub_.publishPose(p); },
-                                            MapWorker::Slam2dInputs{calibrations, sensors, nullptr, 0});
+                                            MapWorker::Slam2dInputs{calibrations, sensors, nullptr, 0},
+                                            MapWorker::LoopInputs{no_recognition, nullptr, 0});
   v1::RobotMessage cloud;
   cloud.set_seq(1);
   cloud.mutable_cloud()->set_frame(v1::PointCloud::MAP);

@@ -413,3 +413,55 @@ TEST(CuboidMapBlockVersions, OnlyBlocksTouchedByAScanCarryItsVersion) {
 
 }  // namespace
 }  // namespace rmap::map3d
+
+namespace rmap::map3d {
+namespace {
+
+TEST(CuboidMapRewrite, RewritesARowAndLeavesTheOtherCells) {
+  CuboidMap map(0.1);
+  // A horizontal ray at z index 5 and one at z index 8, from x cell 0 to 20.
+  map.insertScan({0.05f, 0.05f, 0.55f}, std::vector<Eigen::Vector3f>{{2.05f, 0.05f, 0.55f}});
+  map.insertScan({0.05f, 0.05f, 0.85f}, std::vector<Eigen::Vector3f>{{2.05f, 0.05f, 0.85f}});
+  ASSERT_EQ(map.queryCell({20, 0, 5}).state, CellState::kOccupied);
+  ASSERT_EQ(map.queryCell({3, 0, 5}).state, CellState::kFree);
+  const uint64_t version = map.version();
+
+  // Row z = 5 over x 0..31, y 0..3: a wall at x = 10, free before it, unknown beyond.
+  map.rewriteCells({0, 0, 5}, {31, 3, 5}, [](const CellKey& c) -> std::optional<float> {
+    if (c.x < 10) return -1.0f;
+    if (c.x == 10) return 100.0f;  // clamped
+    return std::nullopt;
+  });
+  EXPECT_GT(map.version(), version);
+  EXPECT_EQ(map.queryCell({3, 0, 5}).state, CellState::kFree);
+  EXPECT_FLOAT_EQ(map.queryCell({3, 0, 5}).log_odds, -1.0f);
+  EXPECT_EQ(map.queryCell({10, 2, 5}).state, CellState::kOccupied);
+  EXPECT_FLOAT_EQ(map.queryCell({10, 2, 5}).log_odds, map.occupancyParams().clamp_max_log_odds);
+  EXPECT_EQ(map.queryCell({20, 0, 5}).state, CellState::kUnknown);  // the old wall is gone
+  EXPECT_EQ(map.queryCell({15, 0, 5}).state, CellState::kUnknown);
+  // The other row is untouched.
+  EXPECT_EQ(map.queryCell({20, 0, 8}).state, CellState::kOccupied);
+  EXPECT_EQ(map.queryCell({3, 0, 8}).state, CellState::kFree);
+}
+
+TEST(CuboidMapRewrite, UnknownOnlyRangesCreateNoBlocksAndBadInputChangesNothing) {
+  CuboidMap map(0.1);
+  map.insertScan({0.05f, 0.05f, 0.05f}, std::vector<Eigen::Vector3f>{{1.05f, 0.05f, 0.05f}});
+  const MapStats before = map.stats();
+  map.rewriteCells({1000, 1000, 0}, {1100, 1100, 0}, [](const CellKey&) { return std::nullopt; });
+  EXPECT_EQ(map.stats().blocks, before.blocks);
+
+  const uint64_t version = map.version();
+  EXPECT_THROW(map.rewriteCells({5, 0, 0}, {4, 0, 0}, [](const CellKey&) { return 1.0f; }), std::invalid_argument);
+  EXPECT_THROW(map.rewriteCells({0, 0, 0}, {kCellLimit, 0, 0}, [](const CellKey&) { return 1.0f; }),
+               std::invalid_argument);
+  EXPECT_THROW(map.rewriteCells({0, 0, 0}, {20, 0, 0},
+                                [](const CellKey& c) { return c.x == 20 ? std::nanf("") : 1.0f; }),
+               std::invalid_argument);
+  EXPECT_EQ(map.version(), version);
+  EXPECT_EQ(map.queryCell({3, 0, 0}).state, CellState::kFree);
+  EXPECT_EQ(map.stats().known_cells, before.known_cells);
+}
+
+}  // namespace
+}  // namespace rmap::map3d

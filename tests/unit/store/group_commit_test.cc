@@ -62,6 +62,8 @@ class GatedStore final : public Store {
   std::vector<TrajectoryPose> trajectory(const std::string&, int64_t, size_t) const override { return {}; }
   int64_t appendEvent(const EventRecord&) override { return 0; }
   std::vector<EventRecord> events(const std::string&, int64_t, size_t) const override { return {}; }
+  std::optional<int64_t> appendLoopClosure(const LoopClosureRecord&) override { return std::nullopt; }
+  std::vector<LoopClosureRecord> loopClosures(const LoopClosureFilter&) const override { return {}; }
   void putSnapshot(const Snapshot&) override {}
   std::optional<Snapshot> snapshot(const std::string&) const override { return std::nullopt; }
 

@@ -83,7 +83,7 @@ TEST(Store, OpenCreatesDataDirAndWalDatabaseWithSchemaVersion) {
   { const auto store = Store::open(data_dir); }
   ASSERT_TRUE(std::filesystem::exists(data_dir / "rmap.db"));
   EXPECT_EQ(queryDirectly(data_dir / "rmap.db", "PRAGMA journal_mode"), "wal");
-  EXPECT_EQ(queryDirectly(data_dir / "rmap.db", "PRAGMA user_version"), "1");
+  EXPECT_EQ(queryDirectly(data_dir / "rmap.db", "PRAGMA user_version"), "2");
 }
 
 TEST(Store, MessagesRoundTripWithIncreasingIds) {
@@ -391,11 +391,81 @@ TEST(Store, UncreatableDataDirGivesErrorNamingIt) {
 TEST(Store, NewerSchemaVersionIsRefused) {
   TempDir tmp;
   { Store::open(tmp.path()); }
-  queryDirectly(tmp.path() / "rmap.db", "PRAGMA user_version = 2");
-  ASSERT_EQ(queryDirectly(tmp.path() / "rmap.db", "PRAGMA user_version"), "2");
+  queryDirectly(tmp.path() / "rmap.db", "PRAGMA user_version = 3");
+  ASSERT_EQ(queryDirectly(tmp.path() / "rmap.db", "PRAGMA user_version"), "3");
   const std::string error = storeErrorOf([&] { Store::open(tmp.path()); });
-  EXPECT_NE(error.find("schema version 2"), std::string::npos) << error;
+  EXPECT_NE(error.find("schema version 3"), std::string::npos) << error;
   EXPECT_NE(error.find((tmp.path() / "rmap.db").string()), std::string::npos) << error;
+}
+
+LoopClosureRecord closure(const std::string& map, const std::string& source, const std::string& query_robot,
+                          int64_t query_stamp_ns, const std::string& match_robot, int64_t match_stamp_ns) {
+  return {0, map, source, query_robot, query_stamp_ns, match_robot, match_stamp_ns, 99, R"({"score":0.5})"};
+}
+
+LoopClosureFilter filter(std::string map = "", std::string robot = "", std::string source = "", int64_t after_id = 0,
+                         size_t limit = 1000) {
+  return {std::move(map), std::move(robot), std::move(source), after_id, limit};
+}
+
+TEST(Store, LoopClosuresAreStoredOnceAndFilteredByMapRobotSourceAndCursor) {
+  TempDir tmp;
+  auto store = Store::open(tmp.path());
+  const std::optional<int64_t> a = store->appendLoopClosure(closure("hall", "camera", "r1", 10, "r2", 5));
+  const std::optional<int64_t> b = store->appendLoopClosure(closure("hall", "geometry", "r2", 20, "r2", 3));
+  const std::optional<int64_t> c = store->appendLoopClosure(closure("yard", "camera", "r3", 30, "r3", 1));
+  ASSERT_TRUE(a && b && c);
+  EXPECT_LT(*a, *b);
+  EXPECT_LT(*b, *c);
+  // The same closure found again (a replay of the log) is not stored twice.
+  EXPECT_FALSE(store->appendLoopClosure(closure("hall", "camera", "r1", 10, "r2", 5)));
+  // Another source or stamp is another closure.
+  const std::optional<int64_t> d = store->appendLoopClosure(closure("hall", "laser_intensity", "r1", 10, "r2", 5));
+  ASSERT_TRUE(d);
+
+  const auto ids = [&](const LoopClosureFilter& f) {
+    std::vector<int64_t> out;
+    for (const LoopClosureRecord& r : store->loopClosures(f)) out.push_back(r.id);
+    return out;
+  };
+  EXPECT_EQ(ids(filter()), (std::vector<int64_t>{*a, *b, *c, *d}));
+  EXPECT_EQ(ids(filter("hall")), (std::vector<int64_t>{*a, *b, *d}));
+  EXPECT_EQ(ids(filter("", "r2")), (std::vector<int64_t>{*a, *b, *d}));  // either side
+  EXPECT_EQ(ids(filter("", "r1", "camera")), (std::vector<int64_t>{*a}));
+  EXPECT_EQ(ids(filter("hall", "", "", *a)), (std::vector<int64_t>{*b, *d}));
+  EXPECT_EQ(ids(filter("", "", "", 0, 2)), (std::vector<int64_t>{*a, *b}));
+
+  const std::vector<LoopClosureRecord> read = store->loopClosures(filter("", "", "geometry"));
+  ASSERT_EQ(read.size(), 1u);
+  EXPECT_EQ(read[0].map, "hall");
+  EXPECT_EQ(read[0].query_robot, "r2");
+  EXPECT_EQ(read[0].query_stamp_ns, 20);
+  EXPECT_EQ(read[0].match_robot, "r2");
+  EXPECT_EQ(read[0].match_stamp_ns, 3);
+  EXPECT_EQ(read[0].detected_ns, 99);
+  EXPECT_EQ(read[0].json, R"({"score":0.5})");
+
+  // Durable: a new process reads them back.
+  store.reset();
+  store = Store::open(tmp.path());
+  EXPECT_EQ(ids(filter()), (std::vector<int64_t>{*a, *b, *c, *d}));
+}
+
+TEST(Store, VersionOneDatabaseGainsTheLoopClosureTableAndKeepsItsData) {
+  TempDir tmp;
+  {
+    auto store = Store::open(tmp.path());
+    const MessageRecord m = message("hall", "r1", 1, "payload");
+    store->append(std::span(&m, 1));
+  }
+  // What a version-1 rmapd left behind.
+  queryDirectly(tmp.path() / "rmap.db", "DROP TABLE loop_closures");
+  queryDirectly(tmp.path() / "rmap.db", "PRAGMA user_version = 1");
+  auto store = Store::open(tmp.path());
+  EXPECT_EQ(queryDirectly(tmp.path() / "rmap.db", "PRAGMA user_version"), "2");
+  EXPECT_EQ(store->messageCount(), 1u);
+  EXPECT_TRUE(store->appendLoopClosure(closure("hall", "camera", "r1", 10, "r1", 5)));
+  EXPECT_EQ(store->loopClosures(filter()).size(), 1u);
 }
 
 TEST(Store, FileThatIsNoDatabaseIsRefused) {

@@ -1,0 +1,48 @@
+#pragma once
+/// @file place_recognizer.h
+/// The seam between rmapd and a place recognition engine: a stream of 8-bit
+/// grey frames in, accepted matches with older frames out. One instance per
+/// map and kind of frame, fed in log order.
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <optional>
+
+#include <opencv2/core/mat.hpp>
+
+#include "app/loop_closures.h"
+
+namespace rmap::app {
+
+/// The images place recognition runs on; each kind has its own recognizer
+/// (their images do not look alike, so they are never compared).
+enum class FrameKind {
+  kCamera,              ///< camera images
+  kIntensityPanorama,   ///< panoramas of the intensities of 3D clouds
+  kReflectivityPatch,   ///< patches of the 2D map's reflectivity layer around 2D-laser robots
+};
+inline constexpr FrameKind kFrameKinds[] = {FrameKind::kCamera, FrameKind::kIntensityPanorama,
+                                            FrameKind::kReflectivityPatch};
+/// The source a loop closure found on frames of `kind` reports.
+inline LoopSource sourceOf(FrameKind kind) {
+  return kind == FrameKind::kCamera ? LoopSource::kCamera : LoopSource::kLaserIntensity;
+}
+
+class PlaceRecognizer {
+ public:
+  struct Match {
+    int64_t reference_frame = -1;  ///< 0-based index of the older frame
+    double score = 0.0;            ///< acceptance score, higher = surer
+  };
+  virtual ~PlaceRecognizer() = default;
+  /// Adds the next frame (its index is the number of frames added before).
+  /// @return the older frame it closes a loop with, when the engine accepts one
+  /// @throws std::invalid_argument for an image the engine cannot use (state unchanged)
+  virtual std::optional<Match> addFrame(const cv::Mat& gray) = 0;
+};
+
+/// Makes the recognizer of a kind of frame, or nullptr when that kind is off.
+using RecognizerFactory = std::function<std::unique_ptr<PlaceRecognizer>(FrameKind)>;
+
+}  // namespace rmap::app

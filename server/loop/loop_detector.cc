@@ -1,0 +1,237 @@
+#include "loop/loop_detector.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include "loop/binary_descriptor.h"
+#include "loop/descriptor_matching.h"
+
+namespace rmap::loop {
+
+void LoopDetectorOptions::validate() const {
+  vocabulary.validate();
+  verification.validate();
+  auto require = [](bool ok, const char* what) {
+    if (!ok) throw std::invalid_argument(std::string("LoopDetectorOptions: ") + what);
+  };
+  require(track_distance_fraction > 0.0 && track_distance_fraction < 0.5, "track_distance_fraction must be in (0, 0.5)");
+  require(track_ratio > 0.0 && track_ratio <= 1.0, "track_ratio must be in (0, 1]");
+  require(purge_after_frames >= 0, "purge_after_frames must be >= 0");
+  require(exclusion_window_frames >= 1, "exclusion_window_frames must be >= 1");
+  require(min_similarity >= 0.0 && min_similarity <= 1.0, "min_similarity must be in [0, 1]");
+  require(island_score_fraction > 0.0 && island_score_fraction <= 1.0, "island_score_fraction must be in (0, 1]");
+  require(island_gap_frames >= 1, "island_gap_frames must be >= 1");
+  require(temporal_consistency_frames >= 1, "temporal_consistency_frames must be >= 1");
+  require(verify_islands >= 1, "verify_islands must be >= 1");
+  require(verify_per_island >= 1, "verify_per_island must be >= 1");
+  require(std::isfinite(inlier_floor) && inlier_floor >= 0.0, "inlier_floor must be finite and >= 0");
+  require(evidence_decay >= 0.0 && evidence_decay < 1.0, "evidence_decay must be in [0, 1)");
+  require(std::isfinite(min_score), "min_score must be finite");
+}
+
+namespace {
+
+constexpr int kMinImageSidePx = 32;
+
+const LoopDetectorOptions& validated(const LoopDetectorOptions& o) {
+  o.validate();
+  return o;
+}
+
+std::unique_ptr<FeatureExtractor> orDefault(std::unique_ptr<FeatureExtractor> extractor) {
+  return extractor ? std::move(extractor) : makeExtractor(DescriptorType::kOrb);
+}
+
+}  // namespace
+
+LoopDetector::LoopDetector(LoopDetectorOptions options, std::unique_ptr<FeatureExtractor> extractor)
+    : options_(validated(options)),
+      extractor_(orDefault(std::move(extractor))),
+      vocabulary_(extractor_->descriptorBytes(), options_.vocabulary) {}
+
+FrameResult LoopDetector::addFrame(const cv::Mat& gray) {
+  checkGrayImage(gray, kMinImageSidePx);
+  return addFeatures(extractor_->extract(gray));
+}
+
+FrameResult LoopDetector::addFeatures(const Features& features) {
+  const cv::Mat& d = features.descriptors;
+  const auto n = static_cast<int>(features.keypoints.size());
+  if (n > 0 && (d.type() != CV_8UC1 || d.cols != extractor_->descriptorBytes() || d.rows != n)) {
+    throw std::invalid_argument("LoopDetector: descriptors must be CV_8U rows of " +
+                                std::to_string(extractor_->descriptorBytes()) + " bytes (" +
+                                toString(extractor_->type()) + "), one per keypoint");
+  }
+  if (n == 0 && !d.empty()) throw std::invalid_argument("LoopDetector: descriptors without keypoints");
+
+  const int blocks = descriptorBlocks(extractor_->descriptorBytes());
+  std::vector<uint64_t> packed(static_cast<size_t>(n) * blocks);
+  for (int i = 0; i < n; ++i) packDescriptor(d.ptr<uint8_t>(i), d.cols, packed.data() + static_cast<size_t>(i) * blocks);
+
+  const auto frame = static_cast<int64_t>(frames_.size());
+  std::vector<WordId> words = assignWords(features, packed);
+  const std::vector<FrameScore> scores = index_.score(words, frame - options_.exclusion_window_frames);
+
+  StoredFrame stored;
+  stored.points.reserve(n);
+  for (const cv::KeyPoint& k : features.keypoints) stored.points.push_back(k.pt);
+  stored.descriptors = n > 0 ? d.clone() : cv::Mat(0, extractor_->descriptorBytes(), CV_8U);
+
+  // Verify the best frames of the top islands, and of the island the previous frame's loop predicts.
+  std::vector<Island> candidates = islands(scores);
+  if (candidates.size() > static_cast<size_t>(options_.verify_islands)) candidates.resize(options_.verify_islands);
+  if (const std::optional<Island> predicted = predictedIsland(scores, frame)) candidates.push_back(*predicted);
+  std::optional<LoopCandidate> best;
+  std::vector<int64_t> verified;
+  for (Island& island : candidates) {
+    std::sort(island.members.begin(), island.members.end(),
+              [](const FrameScore& x, const FrameScore& y) { return x.score > y.score; });
+    if (island.members.size() > static_cast<size_t>(options_.verify_per_island)) {
+      island.members.resize(options_.verify_per_island);
+    }
+    for (const FrameScore& m : island.members) {
+      if (std::find(verified.begin(), verified.end(), m.frame) != verified.end()) continue;  // islands may overlap
+      verified.push_back(m.frame);
+      const StoredFrame& ref = frames_[m.frame];
+      const Verification v =
+          verifyGeometry(stored.points, stored.descriptors, ref.points, ref.descriptors, options_.verification);
+      if (!best || v.inliers > best->inliers) best = LoopCandidate{frame, m.frame, 0.0, v.inliers, v.matches, m.score};
+    }
+  }
+  if (best) {
+    best->score = best->inliers - options_.inlier_floor;
+    const std::optional<LoopCandidate>& previous = recent_.empty() ? std::nullopt : recent_.back();
+    if (best->score > 0.0 && previous && continues(*previous, best->reference_frame)) {
+      best->score += options_.evidence_decay * std::max(0.0, previous->score);
+    }
+  }
+
+  FrameResult result;
+  result.frame = frame;
+  if (best && temporallyConsistent(best->reference_frame)) {
+    result.best = best;
+    result.accepted = best->score >= options_.min_score;
+  }
+
+  index_.addFrame(words);
+  frames_.push_back(std::move(stored));
+  previous_words_ = std::move(words);
+  recent_.push_back(best);
+  while (recent_.size() > static_cast<size_t>(std::max(1, options_.temporal_consistency_frames - 1))) recent_.pop_front();
+  purge(frame);
+  return result;
+}
+
+std::vector<WordId> LoopDetector::assignWords(const Features& features, const std::vector<uint64_t>& packed) {
+  const int n = static_cast<int>(features.keypoints.size());
+  const int blocks = descriptorBlocks(extractor_->descriptorBytes());
+  std::vector<WordId> words(n, -1);
+  std::vector<bool> moved(n, false);  // reinforced, and its descriptor changed
+  if (!frames_.empty()) {
+    const int track_bits = static_cast<int>(options_.track_distance_fraction * vocabulary_.descriptorBits());
+    for (const auto& [i, j] :
+         mutualMatches(features.descriptors, frames_.back().descriptors, track_bits, options_.track_ratio)) {
+      if (vocabulary_.alive(previous_words_[j])) words[i] = previous_words_[j];
+    }
+  }
+  std::vector<WordId> created;
+  for (int i = 0; i < n; ++i) {
+    const uint64_t* p = packed.data() + static_cast<size_t>(i) * blocks;
+    if (words[i] < 0) words[i] = vocabulary_.match(p);
+    if (words[i] >= 0) {
+      moved[i] = vocabulary_.reinforce(words[i], p);
+    } else {
+      words[i] = vocabulary_.add(p);
+      created.push_back(words[i]);
+    }
+  }
+  // A reinforced word that moved onto another word absorbs it (the one seen more keeps its id).
+  for (int i = 0; i < n; ++i) {
+    const WordId w = words[i];
+    if (!moved[i] || !vocabulary_.alive(w)) continue;
+    const WordId other = vocabulary_.mergePartner(w);
+    if (other < 0) continue;
+    const bool keep_w = vocabulary_.observations(w) >= vocabulary_.observations(other);
+    const WordId keep = keep_w ? w : other, gone = keep_w ? other : w;
+    vocabulary_.merge(keep, gone);
+    index_.mergeWords(keep, gone);
+    std::replace(words.begin(), words.end(), gone, keep);
+  }
+  if (options_.purge_after_frames > 0) new_words_.emplace_back(static_cast<int64_t>(frames_.size()), std::move(created));
+  return words;
+}
+
+std::vector<LoopDetector::Island> LoopDetector::islands(std::vector<FrameScore> scores) const {
+  double top = 0.0;
+  for (const FrameScore& s : scores) top = std::max(top, s.score);
+  std::vector<Island> out;
+  if (top < options_.min_similarity || top <= 0.0) return out;
+  const double floor = std::max(options_.min_similarity, options_.island_score_fraction * top);
+  std::erase_if(scores, [&](const FrameScore& s) { return s.score < floor; });
+  std::sort(scores.begin(), scores.end(), [](const FrameScore& a, const FrameScore& b) { return a.frame < b.frame; });
+  for (const FrameScore& s : scores) {
+    if (out.empty() || s.frame - out.back().last >= options_.island_gap_frames) {
+      out.emplace_back();
+      out.back().first = s.frame;
+    }
+    Island& island = out.back();
+    island.last = s.frame;
+    island.score += s.score;
+    island.members.push_back(s);
+  }
+  std::sort(out.begin(), out.end(), [](const Island& a, const Island& b) { return a.score > b.score; });
+  return out;
+}
+
+std::optional<LoopDetector::Island> LoopDetector::predictedIsland(const std::vector<FrameScore>& scores,
+                                                                  int64_t frame) const {
+  if (recent_.empty() || !recent_.back() || recent_.back()->score < options_.min_score) return std::nullopt;
+  // The previous frame closed a loop on r: this one most likely closes on the frames around r + 1.
+  const int64_t r = recent_.back()->reference_frame + 1;
+  const int64_t first = std::max<int64_t>(0, r - options_.island_gap_frames);
+  const int64_t last = std::min<int64_t>(r + options_.island_gap_frames, frame - options_.exclusion_window_frames - 1);
+  if (last < first) return std::nullopt;
+  Island island;
+  island.first = first;
+  island.last = last;
+  for (const FrameScore& s : scores) {
+    if (s.frame >= first && s.frame <= last) {
+      island.members.push_back(s);
+      island.score += s.score;
+    }
+  }
+  if (island.members.empty()) island.members.push_back({std::clamp(r, first, last), 0.0});
+  return island;
+}
+
+bool LoopDetector::continues(const LoopCandidate& earlier, int64_t reference) const {
+  return earlier.inliers > 0 && std::abs(earlier.reference_frame - reference) <= options_.island_gap_frames;
+}
+
+bool LoopDetector::temporallyConsistent(int64_t reference) const {
+  const size_t needed = static_cast<size_t>(options_.temporal_consistency_frames - 1);
+  if (recent_.size() < needed) return false;
+  int64_t later = reference;
+  for (size_t k = 0; k < needed; ++k) {
+    const std::optional<LoopCandidate>& earlier = recent_[recent_.size() - 1 - k];
+    if (!earlier || !continues(*earlier, later)) return false;
+    later = earlier->reference_frame;
+  }
+  return true;
+}
+
+void LoopDetector::purge(int64_t frame) {
+  while (!new_words_.empty() && new_words_.front().first + options_.purge_after_frames <= frame) {
+    for (WordId w : new_words_.front().second) {
+      if (vocabulary_.alive(w) && index_.documentFrequency(w) <= 1) {
+        vocabulary_.remove(w);
+        index_.removeWord(w);
+      }
+    }
+    new_words_.pop_front();
+  }
+}
+
+}  // namespace rmap::loop

@@ -1,0 +1,145 @@
+#pragma once
+/// @file loop_detector.h
+/// Online place recognition on a stream of grey images: binary features, an
+/// incremental vocabulary (no offline training), tf-idf scoring through an
+/// inverted index, islands of neighbouring frames, temporal consistency and
+/// geometric verification. No I/O, no threads of its own.
+///
+/// Per frame:
+///  1. Features (the extractor, ORB by default).
+///  2. Words. Descriptors matched to the previous frame's (mutual nearest,
+///     ratio test, within track_distance_fraction of the bits) take the word of
+///     their match: a feature tracked over consecutive frames reinforces one
+///     word. The others join their nearest word within the vocabulary's match
+///     distance or become new words. Reinforced words that drift onto another
+///     word are merged with it. Words seen in a single frame are removed
+///     purge_after_frames later (unstable detections; 0 keeps them).
+///  3. Similarity s(q, f) (InvertedIndex, tf-idf) to the frames older than
+///     the exclusion window (recent frames look alike without being loops).
+///  4. Islands: frames scoring ≥ island_score_fraction of the best, grouped
+///     when fewer than island_gap_frames apart; an island scores the sum of
+///     its frames' similarities.
+///  5. Geometric verification (fundamental-matrix RANSAC) of the
+///     verify_per_island most similar frames of the verify_islands best
+///     islands, and of the island around r + 1 when the previous frame closed
+///     a loop on r (the loop continues). The frame with most inliers is the
+///     candidate.
+///  6. Temporal consistency, as accumulated evidence: a candidate brings
+///     e = inliers − inlier_floor (the inliers a wrong place reaches), and
+///     when e > 0 and its reference continues the previous frame's (within
+///     island_gap_frames) it also inherits evidence_decay × the previous
+///     score: score = e + evidence_decay · max(0, previous score). A loop
+///     seen over consecutive frames grows surer; an isolated match must
+///     stand on its own; a frame whose match is no better than a wrong
+///     place's is never carried by its predecessors. With
+///     temporal_consistency_frames = n > 1, a candidate is also reported
+///     only when the n − 1 previous frames' candidates chain to it.
+///     The loop is accepted when score ≥ min_score.
+/// Memory per frame: keypoint positions and descriptors (≈ (8 + descriptor
+/// bytes) × features, 20 KB for 500 ORB features), plus the vocabulary
+/// (≈ 50 words per frame kept on Lip6). Windows are in frames: feed frames
+/// at a steady pace of motion (a robot standing still for longer than the
+/// exclusion window would close loops on itself). Thread-compatible, not
+/// thread-safe.
+
+#include <cstdint>
+#include <deque>
+#include <memory>
+#include <optional>
+#include <vector>
+
+#include "loop/binary_features.h"
+#include "loop/geometric_verification.h"
+#include "loop/incremental_vocabulary.h"
+#include "loop/inverted_index.h"
+
+namespace rmap::loop {
+
+struct LoopDetectorOptions {
+  VocabularyOptions vocabulary;
+  GeometricVerificationOptions verification;
+  double track_distance_fraction = 0.2;  ///< tracked descriptor pairs within this fraction of the bits ...
+  double track_ratio = 0.8;              ///< ... and below this nearest / second-nearest ratio
+  int purge_after_frames = 2;            ///< words seen in one frame only are dropped this many frames later (0: never)
+  int exclusion_window_frames = 50;      ///< the most recent frames are not loop candidates
+  double min_similarity = 0.0;           ///< frames less similar than this are not candidates
+  double island_score_fraction = 0.5;    ///< candidates score at least this fraction of the best frame
+  int island_gap_frames = 5;             ///< candidates this close (frame indices) form one island
+  int temporal_consistency_frames = 1;   ///< consecutive frames whose candidates must chain (1: evidence only)
+  int verify_islands = 2;                ///< highest-scoring islands verified geometrically ...
+  int verify_per_island = 2;             ///< ... through their most similar frames
+  double inlier_floor = 10.0;            ///< inliers that bring no evidence (what wrong places reach)
+  double evidence_decay = 0.75;          ///< share of the previous frame's score a continuing loop inherits, [0, 1)
+  double min_score = 10.0;               ///< acceptance threshold on the score
+  /// @throws std::invalid_argument naming the first bad field
+  void validate() const;
+};
+
+struct LoopCandidate {
+  int64_t query_frame = -1;      ///< 0-based index of the frame just added
+  int64_t reference_frame = -1;  ///< 0-based index of the older frame it matches
+  double score = 0.0;            ///< the acceptance score swept for precision–recall curves (higher = surer; see step 6)
+  int inliers = 0;               ///< geometric verification inliers
+  int matches = 0;               ///< putative descriptor matches the inliers were drawn from
+  double similarity = 0.0;       ///< tf-idf similarity of the two frames (InvertedIndex), 0..1
+};
+
+struct FrameResult {
+  int64_t frame = -1;
+  /// Best verified candidate that passed every test but the acceptance threshold (for sweeps).
+  std::optional<LoopCandidate> best;
+  bool accepted = false;  ///< best passed every test at the configured threshold
+};
+
+class LoopDetector {
+ public:
+  /// @param extractor  nullptr = ORB with the default options
+  /// @throws std::invalid_argument for invalid options
+  explicit LoopDetector(LoopDetectorOptions options = {}, std::unique_ptr<FeatureExtractor> extractor = nullptr);
+
+  /// Adds the next frame (8-bit grey, ≥ 32×32 px) and looks for a loop among older frames.
+  /// @throws std::invalid_argument for an empty / wrong-type / too small image; state unchanged
+  FrameResult addFrame(const cv::Mat& gray);
+  /// Same with features the caller extracted (same descriptor type as the extractor).
+  /// @throws std::invalid_argument when descriptors are not CV_8U rows of the extractor's width, one per keypoint
+  FrameResult addFeatures(const Features& features);
+
+  size_t frames() const { return frames_.size(); }
+  size_t vocabularyWords() const { return vocabulary_.size(); }
+  const LoopDetectorOptions& options() const { return options_; }
+  const IncrementalVocabulary& vocabulary() const { return vocabulary_; }
+  const InvertedIndex& index() const { return index_; }
+
+ private:
+  struct StoredFrame {
+    std::vector<cv::Point2f> points;
+    cv::Mat descriptors;
+  };
+  struct Island {
+    int64_t first = -1, last = -1;
+    double score = 0.0;
+    std::vector<FrameScore> members;
+  };
+
+  std::vector<WordId> assignWords(const Features& features, const std::vector<uint64_t>& packed);
+  /// Islands of the frames scoring near the best, highest island score first.
+  std::vector<Island> islands(std::vector<FrameScore> scores) const;
+  /// The frames around the previous frame's accepted reference + 1, if it had one.
+  std::optional<Island> predictedIsland(const std::vector<FrameScore>& scores, int64_t frame) const;
+  /// Whether `reference` continues the loop of an earlier frame's candidate.
+  bool continues(const LoopCandidate& earlier, int64_t reference) const;
+  /// Whether the previous temporal_consistency_frames − 1 frames had candidates chaining to `reference`.
+  bool temporallyConsistent(int64_t reference) const;
+  void purge(int64_t frame);
+
+  LoopDetectorOptions options_;
+  std::unique_ptr<FeatureExtractor> extractor_;
+  IncrementalVocabulary vocabulary_;
+  InvertedIndex index_;
+  std::vector<StoredFrame> frames_;
+  std::vector<WordId> previous_words_;  ///< word of each feature of the previous frame
+  std::deque<std::optional<LoopCandidate>> recent_;  ///< best candidates of the last frames, newest last
+  std::deque<std::pair<int64_t, std::vector<WordId>>> new_words_;  ///< words created per frame, awaiting purge
+};
+
+}  // namespace rmap::loop

@@ -1,0 +1,97 @@
+// Loop closures in the web viewer: two simulated 2D-laser robots (rmap-sim) map one building
+// and rmapd finds loop closures between their places; the viewer lists them and draws each as
+// a line between its two poses in its source's colour (web/app/colors.js LOOP_COLORS), and
+// the lines show in a screenshot.
+//
+//   node --test tests/browser/loop_closures.test.mjs      (env: RMAPD, RMAP_SIM, RMAP_TEST_ARTIFACTS)
+
+import assert from 'node:assert/strict';
+import { after, before, describe, test } from 'node:test';
+
+import {
+  artifactPath, getJson, launchBrowser, log, openViewerPage, startRmapd, startSim, waitFor,
+} from './lib/harness.mjs';
+import { decodePng } from './lib/png.mjs';
+
+// web/app/colors.js LOOP_COLORS, as the test expects them on screen.
+const LOOP_COLORS = { camera: '#ffd54a', laser_intensity: '#ff4df0', geometry: '#4dd0ff' };
+
+let server;
+let sim;
+let browser;
+
+/** Pixels of a screenshot inside `rect` within `tolerance` of a CSS colour. */
+function pixelsOf(png, rect, css, tolerance = 40) {
+  const rgb = [1, 3, 5].map((i) => parseInt(css.slice(i, i + 2), 16));
+  let n = 0;
+  for (let y = Math.max(0, Math.floor(rect.y)); y < Math.min(png.height, rect.y + rect.height); y++) {
+    for (let x = Math.max(0, Math.floor(rect.x)); x < Math.min(png.width, rect.x + rect.width); x++) {
+      const o = 4 * (y * png.width + x);
+      if (Math.abs(png.rgba[o] - rgb[0]) <= tolerance && Math.abs(png.rgba[o + 1] - rgb[1]) <= tolerance
+          && Math.abs(png.rgba[o + 2] - rgb[2]) <= tolerance) n++;
+    }
+  }
+  return n;
+}
+
+describe('loop closures in the viewer', { timeout: 200000 }, () => {
+  before(async () => {
+    server = await startRmapd();
+    log(`rmapd ${server.apiUrl} (viewer at ${server.url})`);
+    sim = startSim(server, { robots: 0, duration: 150, rate: 0, extra: ['--laser2d-robots', '2'] });
+    await waitFor('loop closures of map sim', async () => {
+      const json = await getJson(server, '/v1/loop-closures?map=sim&limit=10');
+      return json.loop_closures.length > 0;
+    }, { timeout: 90000, interval: 500 });
+    browser = await launchBrowser();
+  });
+
+  after(async () => {
+    if (browser) await browser.close().catch(() => {});
+    if (sim) await sim.stop();
+    if (server) await server.stop();
+  });
+
+  test('each stored loop closure is listed and drawn as a line in its source colour', async () => {
+    const stored = (await getJson(server, '/v1/loop-closures?map=sim&limit=100000')).loop_closures;
+    const bySource = {};
+    for (const c of stored) bySource[c.source] = (bySource[c.source] || 0) + 1;
+    log(`loop closures stored: ${JSON.stringify(bySource)}`);
+    const { context, page, record } = await openViewerPage(browser, `${server.url}/?map=sim`);
+    try {
+      const hook = (fn) => page.evaluate(`(${fn.toString()})(window.rmapViewer)`);
+      await waitFor('the viewer has read the stored loop closures', async () => {
+        const ids = new Set(await hook((v) => v.loopClosures().map((e) => e.id)));
+        return stored.every((c) => ids.has(c.id));
+      }, { timeout: 30000 });
+      const lines = await hook((v) => v.loopLines());
+      log(`lines drawn by colour: ${JSON.stringify(lines)}`);
+      for (const [source, count] of Object.entries(bySource)) {
+        assert.ok(LOOP_COLORS[source], `unknown source ${source}`);
+        assert.ok((lines[LOOP_COLORS[source]] || 0) >= count, `${source}: ${count} stored, lines ${JSON.stringify(lines)}`);
+      }
+      const items = await page.locator('#loops li').count();
+      assert.ok(items > 0, 'the loop closure list is empty');
+      assert.equal(await page.locator('#loops-empty').isHidden(), true);
+      // The lines are on the map's canvas (not only in the list), in the colours of their sources.
+      await waitFor('the map drawn', async () => hook((v) => v.cuboidCount() > 0 && v.tileStats().pending === 0),
+        { timeout: 60000 });
+      await page.click('#fit-view');
+      await page.waitForTimeout(1500);
+      const rect = await page.evaluate(() => {
+        const r = document.querySelector('canvas.map-canvas').getBoundingClientRect();
+        return { x: r.left, y: r.top, width: r.width, height: r.height };
+      });
+      const shot = decodePng(await page.screenshot({ path: artifactPath('loop-closures.png') }));
+      for (const source of Object.keys(bySource)) {
+        const n = pixelsOf(shot, rect, LOOP_COLORS[source]);
+        log(`${source}: ${n} pixels of ${LOOP_COLORS[source]}`);
+        assert.ok(n > 20, `${source} lines not visible (${n} pixels)`);
+      }
+      assert.deepEqual(record.pageErrors, []);
+      assert.deepEqual(record.foreign, []);
+    } finally {
+      await context.close();
+    }
+  });
+});

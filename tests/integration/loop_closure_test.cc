@@ -1,0 +1,321 @@
+// Two simulated robots with 2D lasers (client::Laser2dRobot, intensities and
+// drifting odometry) map one building from opposite ends of the same tour, so
+// each drives where the other has been: rmapd finds loop closures between
+// them, serves them on GET /v1/loop-closures and pushes them on the viewer
+// stream, and the trajectories it serves after the pose graph's corrections
+// are closer to the truth than the estimates the robots got live.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <map>
+#include <mutex>
+#include <set>
+#include <tuple>
+#include <thread>
+
+#include "api_helpers.h"
+#include "client/http_client.h"
+#include "client/laser2d_robot.h"
+#include "client/robot_client.h"
+#include "rmapd_process.h"
+#include "sim/building.h"
+#include "sim/trajectory.h"
+#include "viewer_stream.h"
+
+namespace rmap::testing {
+namespace {
+
+constexpr double kLaserHeight_m = 1.0;
+constexpr int64_t kStepNs = 100'000'000;
+
+/// The tour driven the other way: reversed, each pose turned to face its new direction of travel.
+std::vector<Eigen::Isometry3d> reversedTour(std::vector<Eigen::Isometry3d> tour) {
+  std::reverse(tour.begin(), tour.end());
+  for (Eigen::Isometry3d& pose : tour) pose.rotate(Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitZ()));
+  return tour;
+}
+
+struct SimRobot {
+  std::string id;
+  client::Laser2dRobot sim;
+  /// Where the robot's odometry frame lies in the map (its guess of its start is this far off).
+  Eigen::Vector3d odometry_offset = Eigen::Vector3d::Zero();
+  std::unique_ptr<client::RobotClient> client;
+  std::mutex mutex;
+  std::map<int64_t, Eigen::Vector3d> truth;           ///< by stamp: base x, y, yaw
+  std::map<int64_t, Eigen::Vector3d> live_estimates;  ///< by stamp, as the robot got them
+};
+
+Eigen::Vector3d planarOf(const nlohmann::json& position, const nlohmann::json& orientation) {
+  const double w = orientation[0].get<double>(), z = orientation[3].get<double>();
+  return {position[0].get<double>(), position[1].get<double>(), 2 * std::atan2(z, w)};
+}
+
+/// Mean translational error (m) of `poses` against `truth` over the stamps both hold.
+double meanError(const std::map<int64_t, Eigen::Vector3d>& poses, const std::map<int64_t, Eigen::Vector3d>& truth,
+                 size_t* matched = nullptr) {
+  double sum = 0.0;
+  size_t n = 0;
+  for (const auto& [stamp, p] : poses) {
+    const auto t = truth.find(stamp);
+    if (t == truth.end()) continue;
+    sum += (p.head<2>() - t->second.head<2>()).norm();
+    ++n;
+  }
+  if (matched) *matched = n;
+  return n ? sum / static_cast<double>(n) : INFINITY;
+}
+
+TEST(LoopClosure, TwoRobotsCrossingOnOneMapCloseALoopAndTheirTrajectoriesAreCorrected) {
+  TempDir dir("rmap-loop");
+  auto rmapd = std::make_unique<RmapdProcess>(dir.path() / "data");
+
+  sim::BuildingOptions building;
+  building.max_furniture_per_room = 1;
+  sim::BuildingLayout layout;
+  sim::VoxelWorld world = sim::makeBuilding(building, 3, &layout);
+  client::extendMarkersToLaserPlane(world, layout, building.floor_height_m, kLaserHeight_m);
+  sim::TrajectoryOptions path;
+  path.sensor_height_m = kLaserHeight_m;
+  path.num_poses = 200;
+  path.step_m = 0.26;
+  const std::vector<Eigen::Isometry3d> tour = sim::planTrajectory(world, path, 5);
+  client::Laser2dRobotOptions laser;
+  laser.laser = sim::Laser2dModel::sickLike();
+  laser.mount_height_m = kLaserHeight_m;
+  // Drift the SLAM's front end has to live with until a loop closes.
+  laser.odometry_forward_sigma = 0.1;
+  laser.odometry_heading_sigma_rad = 0.04;
+
+  // West's idea of where it starts is off by 0.64 m and 4.6°: until the robots meet, it maps its end
+  // of the building that far off; the closures with east's map pull it back.
+  SimRobot a{"east", client::Laser2dRobot(world, tour, laser, 11), {0, 0, 0}, nullptr, {}, {}, {}};
+  SimRobot b{"west", client::Laser2dRobot(world, reversedTour(tour), laser, 12), {0.5, -0.4, 0.08}, nullptr, {}, {},
+             {}};
+  for (SimRobot* r : {&a, &b}) {
+    client::RobotClientOptions options;
+    options.server_url = rmapd->wsUrl();
+    options.hello.set_robot_id(r->id);
+    options.hello.set_map("shared");
+    *options.hello.add_sensors() = r->sim.sensor();
+    r->client = std::make_unique<client::RobotClient>(options);
+    r->client->onPose([r](const v1::PoseEstimate& e) {
+      const double yaw = 2 * std::atan2(e.pose().orientation().z(), e.pose().orientation().w());
+      std::lock_guard lock(r->mutex);
+      r->live_estimates[e.stamp_ns()] = {e.pose().position_m().x(), e.pose().position_m().y(), yaw};
+    });
+    r->client->connect();
+  }
+  // A viewer of the map (it exists once a robot said Hello).
+  ViewerStream viewer(rmapd->port(), "shared");
+  std::vector<nlohmann::json> pushed;  // loop closures seen on the viewer stream
+  std::atomic<bool> watching{true};
+  std::thread watcher([&] {
+    // Until the test is done and the stream has been quiet for a while (a timed-out read
+    // cancels the stream, so there is one).
+    while (std::optional<nlohmann::json> frame = viewer.next(std::chrono::seconds(3))) {
+      const bool loop = frame->is_object() && frame->value("type", "") == "loop_closure";
+      if (loop) pushed.push_back(std::move(*frame));
+      if (!watching && !loop) break;
+    }
+  });
+  const auto start = std::chrono::steady_clock::now();
+  for (int k = 0; k < path.num_poses; ++k) {
+    for (SimRobot* r : {&a, &b}) {
+      client::Laser2dStep step = r->sim.next();
+      if (r->odometry_offset != Eigen::Vector3d::Zero()) {
+        v1::Pose2& odometry = *step.scan.mutable_odometry();
+        const Eigen::Vector3d& o = r->odometry_offset;
+        const Eigen::Rotation2Dd turn(o.z());
+        const Eigen::Vector2d p = turn * Eigen::Vector2d(odometry.x_m(), odometry.y_m()) + o.head<2>();
+        odometry.set_x_m(p.x());
+        odometry.set_y_m(p.y());
+        odometry.set_theta_rad(odometry.theta_rad() + o.z());
+      }
+      v1::RobotMessage m;
+      *m.mutable_scan() = std::move(step.scan);
+      const int64_t stamp = static_cast<int64_t>(k) * kStepNs;
+      m.mutable_scan()->set_stamp_ns(stamp);
+      r->truth[stamp] = step.base_truth;
+      r->client->send(m);
+    }
+  }
+  for (SimRobot* r : {&a, &b}) ASSERT_TRUE(r->client->waitAllAcked(std::chrono::seconds(180)));
+  std::printf("[ stream ] %d scans per robot acknowledged in %.1f s\n", path.num_poses,
+              std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+
+  // The loop closures, and at least one between the two robots.
+  client::HttpClient http(rmapd->httpUrl());
+  nlohmann::json closures;
+  // A cross-robot geometric closure (the one the correction rests on).
+  const auto isCross = [](const nlohmann::json& c) {
+    return c["source"] == "geometry" && c["query"]["robot_id"] != c["match"]["robot_id"];
+  };
+  for (int attempt = 0; attempt < 50; ++attempt) {  // closures are stored behind the acks
+    closures = getJson(http, "/v1/loop-closures?map=shared&limit=100000").at("loop_closures");
+    if (std::any_of(closures.begin(), closures.end(), isCross)) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  }
+  std::map<std::string, int> by_source, far_apart;  // far apart: the two places > 8 m from each other
+  const nlohmann::json* cross = nullptr;
+  for (const nlohmann::json& c : closures) {
+    const std::string source = c["source"];
+    ++by_source[source];
+    EXPECT_TRUE(source == "camera" || source == "laser_intensity" || source == "geometry") << c;
+    EXPECT_EQ(c["map"], "shared");
+    if (c["query"]["position"].is_array() && c["match"]["position"].is_array()) {
+      const Eigen::Vector3d q = planarOf(c["query"]["position"], c["query"]["orientation"]);
+      const Eigen::Vector3d m = planarOf(c["match"]["position"], c["match"]["orientation"]);
+      far_apart[source] += (q - m).head<2>().norm() > 8.0;
+    }
+    if (!cross && isCross(c)) cross = &c;
+  }
+  std::printf("[ closures ] %zu: geometry %d (%d far apart), laser_intensity %d (%d far apart)\n", closures.size(),
+              by_source["geometry"], far_apart["geometry"], by_source["laser_intensity"],
+              far_apart["laser_intensity"]);
+  EXPECT_EQ(far_apart["geometry"], 0);
+  ASSERT_NE(cross, nullptr) << closures.dump();
+  const nlohmann::json& c = *cross;
+  for (const char* end : {"query", "match"}) {
+    const std::string robot = c[end]["robot_id"];
+    EXPECT_TRUE(robot == "east" || robot == "west") << c;
+    ASSERT_TRUE(c[end]["position"].is_array()) << c;
+    ASSERT_EQ(c[end]["position"].size(), 3u);
+    ASSERT_EQ(c[end]["orientation"].size(), 4u);
+  }
+  EXPECT_GT(c["query"]["stamp_ns"].get<int64_t>(), c["match"]["stamp_ns"].get<int64_t>() - 1);
+  EXPECT_GT(c["score"].get<double>(), 0.0);
+  // Both places are the same place: the two poses lie close together in the map.
+  const Eigen::Vector3d q = planarOf(c["query"]["position"], c["query"]["orientation"]);
+  const Eigen::Vector3d m = planarOf(c["match"]["position"], c["match"]["orientation"]);
+  EXPECT_LT((q - m).head<2>().norm(), 8.0) << c;
+  // Both robots' filters find it; another robot's filter does not.
+  for (const std::string robot : {"east", "west"}) {
+    bool found = false;
+    const nlohmann::json of_robot = getJson(http, "/v1/loop-closures?robot=" + robot);
+    for (const nlohmann::json& e : of_robot.at("loop_closures")) {
+      found = found || e["id"] == c["id"];
+      EXPECT_TRUE(e["query"]["robot_id"] == robot || e["match"]["robot_id"] == robot) << e;
+    }
+    EXPECT_TRUE(found) << robot;
+  }
+
+  // The same closure was pushed on the viewer stream.
+  watching = false;
+  watcher.join();
+  bool seen = false;
+  for (const nlohmann::json& p : pushed) seen = seen || (p["id"] == c["id"] && p["source"] == c["source"]);
+  EXPECT_TRUE(seen) << "pushed " << pushed.size() << " loop closures";
+
+  // The corrected trajectories (served by the API) are closer to the truth than the live estimates.
+  const std::string metrics = http.get("/metrics").body;
+  EXPECT_GT(metricValue(metrics, "rmap_trajectory_corrections_total"), 0.0);
+  std::this_thread::sleep_for(std::chrono::milliseconds(700));  // trajectory poses are written every 0.5 s
+  double live_sum = 0.0, corrected_sum = 0.0;
+  for (SimRobot* r : {&a, &b}) {
+    std::map<int64_t, Eigen::Vector3d> corrected;
+    const nlohmann::json trajectory = getJson(http, "/v1/robots/" + r->id + "/trajectory");
+    for (const nlohmann::json& p : trajectory.at("poses")) {
+      corrected[p["stamp_ns"].get<int64_t>()] = planarOf(p["position"], p["orientation"]);
+    }
+    size_t live_n = 0, corrected_n = 0;
+    std::lock_guard lock(r->mutex);
+    const double live = meanError(r->live_estimates, r->truth, &live_n);
+    const double fixed = meanError(corrected, r->truth, &corrected_n);
+    std::printf("[ %s ] mean error live %.3f m (%zu poses), corrected %.3f m (%zu poses)\n", r->id.c_str(), live,
+                live_n, fixed, corrected_n);
+    EXPECT_EQ(corrected_n, r->truth.size());
+    live_sum += live;
+    corrected_sum += fixed;
+  }
+  EXPECT_LT(corrected_sum, live_sum);
+
+  // The 3D map's planar row at the laser height agrees with the corrected 2D map: its occupied
+  // cells lie on 2D cells that are not free (no walls left at the poses before a correction).
+  const client::HttpResponse yaml = http.get("/v1/maps/shared/grid2d.yaml");
+  const client::HttpResponse pgm = http.get("/v1/maps/shared/grid2d.pgm");
+  ASSERT_EQ(yaml.status, 200);
+  ASSERT_EQ(pgm.status, 200);
+  double r2 = 0, origin_x = 0, origin_y = 0;
+  ASSERT_EQ(std::sscanf(yaml.body.c_str() + yaml.body.find("resolution: "), "resolution: %lf", &r2), 1);
+  ASSERT_EQ(std::sscanf(yaml.body.c_str() + yaml.body.find("origin: "), "origin: [%lf, %lf", &origin_x, &origin_y), 2);
+  int width = 0, height = 0, maxval = 0, header = 0;
+  ASSERT_EQ(std::sscanf(pgm.body.c_str(), "P5\n%d %d\n%d\n%n", &width, &height, &maxval, &header), 3);
+  const int i0 = static_cast<int>(std::lround(origin_x / r2)), j0 = static_cast<int>(std::lround(origin_y / r2));
+  const auto free2d = [&](int i, int j) {  // map_server: 254 free, 0 occupied, 205 unknown
+    const int col = i - i0, row = height - 1 - (j - j0);
+    if (col < 0 || col >= width || row < 0 || row >= height) return false;
+    return static_cast<uint8_t>(pgm.body[header + row * width + col]) == 254;
+  };
+  char box[200];
+  std::snprintf(box, sizeof box, "/v1/maps/shared/occupancy/box?min=%f,%f,%f&max=%f,%f,%f&limit=100000", origin_x,
+                origin_y, kLaserHeight_m + 0.01, origin_x + width * r2, origin_y + height * r2, kLaserHeight_m + 0.01);
+  const nlohmann::json cuboids = getJson(http, box).at("cuboids");
+  const double r3 = getJson(http, "/v1/maps/shared").at("resolution_m").get<double>();
+  size_t occupied3d = 0, on_free = 0;
+  for (const nlohmann::json& c : cuboids) {
+    if (c["state"] != "occupied") continue;
+    for (double x = c["min"][0].get<double>() + r3 / 2; x < c["max"][0].get<double>(); x += r3) {
+      for (double y = c["min"][1].get<double>() + r3 / 2; y < c["max"][1].get<double>(); y += r3) {
+        ++occupied3d;
+        bool all_free = true;
+        for (double dx : {-r3 / 4, r3 / 4}) {
+          for (double dy : {-r3 / 4, r3 / 4}) {
+            all_free = all_free && free2d(static_cast<int>(std::floor((x + dx) / r2)),
+                                          static_cast<int>(std::floor((y + dy) / r2)));
+          }
+        }
+        on_free += all_free;
+      }
+    }
+  }
+  std::printf("[ 3D row ] %zu occupied cells at the laser height, %zu of them on free 2D cells\n", occupied3d,
+              on_free);
+  EXPECT_GT(occupied3d, 100u);
+  EXPECT_LT(static_cast<double>(on_free), 0.02 * static_cast<double>(occupied3d));
+
+  // After kill -9 the stored closures are all there, and the replay of the log, which finds
+  // them again, stores none twice.
+  for (SimRobot* r : {&a, &b}) r->client->close();
+  const nlohmann::json before = getJson(http, "/v1/loop-closures?limit=100000").at("loop_closures");
+  rmapd->kill9();
+  rmapd = std::make_unique<RmapdProcess>(dir.path() / "data");
+  client::HttpClient again(rmapd->httpUrl());
+  const nlohmann::json after = getJson(again, "/v1/loop-closures?limit=100000").at("loop_closures");
+  std::set<std::tuple<std::string, std::string, int64_t, std::string, int64_t>> keys;
+  std::set<int64_t> ids;
+  for (const nlohmann::json& e : after) {
+    ids.insert(e["id"].get<int64_t>());
+    EXPECT_TRUE(keys.emplace(e["source"], e["query"]["robot_id"], e["query"]["stamp_ns"], e["match"]["robot_id"],
+                             e["match"]["stamp_ns"])
+                    .second)
+        << "stored twice: " << e;
+  }
+  for (const nlohmann::json& e : before) EXPECT_TRUE(ids.count(e["id"].get<int64_t>())) << e;
+  std::printf("[ restart ] %zu closures before kill -9, %zu after the replay\n", before.size(), after.size());
+}
+
+TEST(LoopClosure, BadQueriesOfTheEndpointGetJsonErrors) {
+  TempDir dir("rmap-loop-bad");
+  RmapdProcess rmapd(dir.path() / "data");
+  client::HttpClient http(rmapd.httpUrl());
+  for (const auto& [target, status] : std::vector<std::pair<std::string, int>>{
+           {"/v1/loop-closures?source=sonar", 400},
+           {"/v1/loop-closures?limit=0", 400},
+           {"/v1/loop-closures?since=-5", 400},
+           {"/v1/loop-closures?since=1e3", 400},
+           {"/v1/loop-closures?robot=no%2Fslash", 400},
+           {"/v1/loop-closures?maps=x", 400},
+           {"/v1/loop-closures?map=nowhere", 404},
+           {"/v1/loop-closures?robot=nobody", 404}}) {
+    const nlohmann::json body = getJson(http, target, status);
+    EXPECT_TRUE(body["error"]["code"].is_string()) << target << ": " << body;
+    EXPECT_FALSE(body["error"]["message"].get<std::string>().empty()) << target;
+  }
+  EXPECT_EQ(getJson(http, "/v1/loop-closures").at("loop_closures"), nlohmann::json::array());
+}
+
+}  // namespace
+}  // namespace rmap::testing
