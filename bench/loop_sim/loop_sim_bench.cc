@@ -9,6 +9,7 @@
 #include <stdexcept>
 
 #include "common/machine.h"
+#include "common/lidar_pair.h"
 #include "datasets/ply_cloud.h"
 #include "loop_sim/detector_run.h"
 
@@ -50,25 +51,6 @@ json sequenceJson(const SimRevisitSequence& seq) {
           {"truth_pairs", pairs},
           {"truth_max_distance_m", o.truth.max_distance_m},
           {"truth_max_heading_rad", o.truth.max_heading_rad}};
-}
-
-const std::vector<float>& intensityOf(const datasets::PlyCloud& cloud, const std::string& path) {
-  for (const auto& [name, values] : cloud.scalars) {
-    if (name.find("intensity") != std::string::npos || name.find("reflectivity") != std::string::npos) return values;
-  }
-  throw std::runtime_error(path + ": no vertex property named like 'intensity' or 'reflectivity'");
-}
-
-Eigen::Matrix4d readTransform(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error("cannot open " + path);
-  Eigen::Matrix4d t;
-  for (int r = 0; r < 4; ++r) {
-    for (int c = 0; c < 4; ++c) {
-      if (!(in >> t(r, c))) throw std::runtime_error(path + ": expected 16 numbers (4×4 row-major)");
-    }
-  }
-  return t;
 }
 
 /// The point under a keypoint: the pixel's own point or the nearest pixel's within `radius` px.

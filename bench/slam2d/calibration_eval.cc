@@ -14,6 +14,7 @@
 #include <stdexcept>
 #include <unordered_map>
 
+#include "common/lidar_pair.h"
 #include "datasets/ply_cloud.h"
 #include "sim/building.h"
 #include "sim/laser2d.h"
@@ -278,25 +279,6 @@ std::vector<float> lidarCosIncidence(const std::vector<Eigen::Vector3f>& points)
     out[i] = static_cast<float>(std::abs(eig.eigenvectors().col(0).dot(p / range)));
   }
   return out;
-}
-
-Eigen::Matrix4d readTransform(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error("cannot open " + path);
-  Eigen::Matrix4d t;
-  for (int r = 0; r < 4; ++r) {
-    for (int c = 0; c < 4; ++c) {
-      if (!(in >> t(r, c))) throw std::runtime_error(path + ": expected 16 numbers (4×4 row-major)");
-    }
-  }
-  return t;
-}
-
-const std::vector<float>& intensityOf(const datasets::PlyCloud& cloud, const std::string& path) {
-  for (const auto& [name, values] : cloud.scalars) {
-    if (name.find("intensity") != std::string::npos) return values;
-  }
-  throw std::runtime_error(path + ": no vertex property named like 'intensity'");
 }
 
 std::string fmt(double v, int digits = 3) {
