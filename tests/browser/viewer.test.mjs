@@ -76,7 +76,9 @@ describe('web viewer', { timeout: 230000 }, () => {
       });
       result = await virtualTimeScreenshot(p, `${server.url}/`, { budgetMs: 15000, timeoutMs: 60000 });
       log(`virtual-time screenshot (attempt ${attempt}): load ${result.loadMs} ms, 15 s of virtual time in `
-        + `${result.budgetRealMs} ms, capture ${result.screenshotMs} ms${result.error ? `, error: ${result.error}` : ''}`);
+        + `${result.budgetRealMs} ms, capture ${result.screenshotMs} ms`
+        + `${result.stalledMs !== undefined ? ` (stalled ${result.stalledMs} ms under paused virtual time, then let run)` : ''}`
+        + `${result.error ? `, error: ${result.error}` : ''}`);
       if (result.error === undefined) break;
       await context.close().catch(() => {});
     }
