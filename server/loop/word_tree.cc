@@ -2,7 +2,7 @@
 
 #include <algorithm>
 #include <climits>
-#include <queue>
+#include <functional>
 #include <stdexcept>
 #include <string>
 
@@ -161,32 +161,40 @@ NearestWords WordTree::search(const uint64_t* query, int32_t exclude) const {
     std::fill(checked_.begin(), checked_.end(), 0);
     stamp_ = 1;
   }
-  struct Branch {
-    int distance;
-    int32_t tree, node;
-    bool operator>(const Branch& o) const { return distance > o.distance; }
+  // A binary min-heap on the reused scratch vector (the operations of
+  // std::priority_queue, without its allocation per search).
+  std::vector<Branch>& queue = queue_;
+  queue.clear();
+  const auto push = [&](Branch b) {
+    queue.push_back(b);
+    std::push_heap(queue.begin(), queue.end(), std::greater<>());
   };
-  std::priority_queue<Branch, std::vector<Branch>, std::greater<>> queue;
-  for (size_t t = 0; t < trees_.size(); ++t) queue.push({0, static_cast<int32_t>(t), 0});
+  for (size_t t = 0; t < trees_.size(); ++t) push({0, static_cast<int32_t>(t), 0});
   int checks = 0;
   while (!queue.empty() && checks < options_.max_checks) {
-    const Tree& tree = trees_[queue.top().tree];
-    const int32_t t = queue.top().tree;
-    int32_t n = queue.top().node;
-    queue.pop();
+    const Tree& tree = trees_[queue.front().tree];
+    const int32_t t = queue.front().tree;
+    int32_t n = queue.front().node;
+    std::pop_heap(queue.begin(), queue.end(), std::greater<>());
+    queue.pop_back();
     while (!tree.nodes[n].children.empty()) {  // descend to the nearest leaf, queueing the siblings
       const Node& node = tree.nodes[n];
       int best = 0, best_d = INT_MAX;
       for (size_t c = 0; c < node.children.size(); ++c) {
         const int d = hammingDistance(query, node.centres.data() + c * blocks_, blocks_);
         if (d < best_d) {
-          if (best_d != INT_MAX) queue.push({best_d, t, node.children[best]});
+          if (best_d != INT_MAX) push({best_d, t, node.children[best]});
           best_d = d, best = static_cast<int>(c);
         } else {
-          queue.push({d, t, node.children[c]});
+          push({d, t, node.children[c]});
         }
       }
       n = node.children[best];
+    }
+    // The leaf's words sit anywhere in the vocabulary: fetch them all before comparing.
+    for (int32_t w : tree.nodes[n].words) {
+      __builtin_prefetch(descriptorOf(w));
+      __builtin_prefetch(&checked_[w]);
     }
     for (int32_t w : tree.nodes[n].words) {
       if (w == exclude || checked_[w] == stamp_) continue;

@@ -83,6 +83,12 @@ class WordTree {
   WordTreeOptions options_;
   std::vector<Tree> trees_;
   size_t words_ = 0;
+  struct Branch {  ///< an unexplored node of a search, by its centre's distance to the query
+    int distance;
+    int32_t tree, node;
+    bool operator>(const Branch& o) const { return distance > o.distance; }
+  };
+  mutable std::vector<Branch> queue_;      ///< search scratch: the best-bin-first heap
   mutable std::vector<uint32_t> checked_;  ///< word id → search stamp of its last comparison
   mutable uint32_t stamp_ = 0;
 };
