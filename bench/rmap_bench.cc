@@ -97,6 +97,8 @@ int main(int argc, char** argv) {
                 "corrected CARMEN log of the same run whose poses judge the closures (scans found by their ranges)");
   d->add_option("--submap-keyframes", slam2d.slam.loop_closure.submap_keyframes, "keyframes per loop-closure submap");
   d->add_option("--loop-min-score", slam2d.slam.loop_closure.min_score, "correlative score a loop closure needs");
+  d->add_option("--loop-ambiguity-margin", slam2d.slam.loop_closure.submap.ambiguity_margin,
+                "a loop match is ambiguous when a pose away from it scores within this margin (0: no check)");
   rmap::bench::CalibrationEvalOptions calib;
   calib.lidar_pair_dir = std::string(RMAP_SHARED_DATA_DIR) + "/lidar-intensity/small-gicp-pair";
   CLI::App* c = app.add_subcommand("calib", "2D laser intensity calibration on both simulated scanners, real lidar check");

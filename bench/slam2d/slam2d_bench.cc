@@ -312,6 +312,7 @@ int runSlam2dBench(const Slam2dBenchOptions& options) {
                          {"keyframes", slam.keyframeCount()},
                          {"searches", lc->searches},
                          {"matches", lc->matches},
+                         {"ambiguous", lc->ambiguous},
                          {"accepted", lc->accepted},
                          {"unsupported", lc->unsupported},
                          {"rejected_after_optimization", lc->rejected_after_optimization},

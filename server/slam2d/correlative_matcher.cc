@@ -41,6 +41,22 @@ struct CorrelativeMatcher::Candidate {
   double score = 0.0;
 };
 
+/// What a search leaves out and when it stops: the ExcludedDisk in the
+/// lattice's shift units (cells from the centre translation), and whether the
+/// first pose reaching min_score ends it.
+struct CorrelativeMatcher::Restriction {
+  bool disk = false;
+  double x = 0.0, y = 0.0, radius2 = 0.0;
+  bool first_only = false;
+  bool excludes(int dx, int dy) const { return disk && (dx - x) * (dx - x) + (dy - y) * (dy - y) <= radius2; }
+  /// Every shift of the 2^level block from (dx, dy) is excluded (the disk is convex: its corners suffice).
+  bool excludesBlock(int dx, int dy, int level) const {
+    const int last = (1 << level) - 1;
+    return excludes(dx, dy) && excludes(dx + last, dy) && excludes(dx, dy + last) && excludes(dx + last, dy + last);
+  }
+  bool done(const std::optional<Candidate>& best) const { return first_only && best.has_value(); }
+};
+
 void CorrelativeMatcherOptions::validate() const {
   if (branch_levels < 1 || branch_levels > 16)
     throw std::invalid_argument("correlative matcher: branch_levels must be in [1, 16], got " +
@@ -274,7 +290,7 @@ uint32_t CorrelativeMatcher::needFor(double score, size_t points) {
 }
 
 void CorrelativeMatcher::descend(const std::vector<Rotation>& rotations, const Candidate& block, int linear_steps,
-                                 double min_score, std::optional<Candidate>& best) const {
+                                 double min_score, const Restriction& restriction, std::optional<Candidate>& best) const {
   const Rotation& rotation = rotations[static_cast<size_t>(block.rotation)];
   const size_t n = rotation.cells.size();
   const int level = block.level - 1;
@@ -284,6 +300,8 @@ void CorrelativeMatcher::descend(const std::vector<Rotation>& rotations, const C
   int count = 0;
   for (int dy = block.dy; dy <= block.dy + step && dy <= linear_steps; dy += step)
     for (int dx = block.dx; dx <= block.dx + step && dx <= linear_steps; dx += step) {
+      if (restriction.done(best)) return;
+      if (restriction.excludesBlock(dx, dy, level)) continue;
       if (level == 0) {  // a lattice pose: its exact score, when its quantised one may reach
         const uint32_t need = best ? std::max(need_min, needFor(best->score, n)) : need_min;
         if (boundAt(0, rotation, dx, dy, need) < need) continue;
@@ -300,18 +318,35 @@ void CorrelativeMatcher::descend(const std::vector<Rotation>& rotations, const C
       children[at] = child;
     }
   for (int i = 0; i < count; ++i) {
-    if (best && children[i].score < needFor(best->score, n)) break;
-    descend(rotations, children[i], linear_steps, min_score, best);
+    if (restriction.done(best) || (best && children[i].score < needFor(best->score, n))) break;
+    descend(rotations, children[i], linear_steps, min_score, restriction, best);
   }
 }
 
 std::optional<CorrelativeMatch> CorrelativeMatcher::match(std::span<const Eigen::Vector2d> points_robot,
                                                           const Pose2& center, double window_m, double window_rad,
-                                                          double min_score) const {
+                                                          double min_score,
+                                                          const std::optional<ExcludedDisk>& excluded) const {
+  return search(points_robot, center, window_m, window_rad, min_score, excluded, false);
+}
+
+std::optional<CorrelativeMatch> CorrelativeMatcher::firstAtLeast(std::span<const Eigen::Vector2d> points_robot,
+                                                                 const Pose2& center, double window_m,
+                                                                 double window_rad, double min_score,
+                                                                 const std::optional<ExcludedDisk>& excluded) const {
+  return search(points_robot, center, window_m, window_rad, min_score, excluded, true);
+}
+
+std::optional<CorrelativeMatch> CorrelativeMatcher::search(std::span<const Eigen::Vector2d> points_robot,
+                                                           const Pose2& center, double window_m, double window_rad,
+                                                           double min_score, const std::optional<ExcludedDisk>& excluded,
+                                                           bool first_only) const {
   const SearchLattice lattice = this->lattice(points_robot, window_m, window_rad);
   if (!(min_score >= 0.0 && min_score <= 1.0))
     throw std::invalid_argument("correlative matcher: min_score must be in [0, 1], got " + std::to_string(min_score));
   if (!center.isFinite()) throw std::invalid_argument("correlative matcher: the centre pose is not finite");
+  if (excluded && (!excluded->center_m.allFinite() || !(excluded->radius_m >= 0.0) || !std::isfinite(excluded->radius_m)))
+    throw std::invalid_argument("correlative matcher: the excluded disk needs a finite centre and radius ≥ 0");
   for (const Eigen::Vector2d& p : points_robot)
     if (!p.allFinite()) throw std::invalid_argument("correlative matcher: a point is not finite");
   if (points_robot.empty()) return std::nullopt;
@@ -323,6 +358,15 @@ std::optional<CorrelativeMatch> CorrelativeMatcher::match(std::span<const Eigen:
 
   const std::vector<Rotation> rotations = discretise(points_robot, center, lattice);
   const int linear_steps = lattice.linear_steps;
+  Restriction restriction;
+  restriction.first_only = first_only;
+  if (excluded) {
+    const double r = raster_.resolution_m;
+    restriction.disk = true;
+    restriction.x = (excluded->center_m.x() - center.x_m) / r;
+    restriction.y = (excluded->center_m.y() - center.y_m) / r;
+    restriction.radius2 = std::pow(excluded->radius_m / r, 2);
+  }
   std::optional<Candidate> best;
   // The coarsest level worth using: one block spanning the whole window.
   int top = 0;
@@ -331,6 +375,8 @@ std::optional<CorrelativeMatch> CorrelativeMatcher::match(std::span<const Eigen:
     for (int r = 0; r < static_cast<int>(rotations.size()); ++r)
       for (int dy = -linear_steps; dy <= linear_steps; ++dy)
         for (int dx = -linear_steps; dx <= linear_steps; ++dx) {
+          if (restriction.done(best)) break;
+          if (restriction.excludes(dx, dy)) continue;
           const double score = scoreAt(rotations[static_cast<size_t>(r)], dx, dy);
           if (score >= min_score && (!best || score > best->score)) best = Candidate{r, dx, dy, 0, score};
         }
@@ -343,8 +389,8 @@ std::optional<CorrelativeMatch> CorrelativeMatcher::match(std::span<const Eigen:
     auto searchTop = [&](std::vector<Candidate>& candidates) {
       std::stable_sort(candidates.begin(), candidates.end(), byBound);
       for (const Candidate& c : candidates) {
-        if (best && c.score < needFor(best->score, n)) break;
-        descend(rotations, c, linear_steps, min_score, best);
+        if (restriction.done(best) || (best && c.score < needFor(best->score, n))) break;
+        descend(rotations, c, linear_steps, min_score, restriction, best);
       }
     };
     // A group of rotations moves the farthest point by about one cell per
@@ -364,7 +410,7 @@ std::optional<CorrelativeMatch> CorrelativeMatcher::match(std::span<const Eigen:
       std::vector<Candidate> members;
       for (const Candidate& b : blocks) {
         const uint32_t need = best ? std::max(need_min, needFor(best->score, n)) : need_min;
-        if (b.score < need) break;
+        if (b.score < need || restriction.done(best)) break;
         const RotationGroup& g = groups[static_cast<size_t>(b.rotation)];
         members.clear();
         for (int r = g.first; r < g.first + g.count; ++r) {

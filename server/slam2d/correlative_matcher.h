@@ -54,6 +54,15 @@ struct CorrelativeMatcherOptions {
   void validate() const;
 };
 
+/// Translations a search leaves out: those within radius_m of center_m (map
+/// frame, at any rotation). A search around a found pose with its
+/// neighbourhood left out finds a rival: another place the scan fits nearly
+/// as well.
+struct ExcludedDisk {
+  Eigen::Vector2d center_m = Eigen::Vector2d::Zero();
+  double radius_m = 0.0;
+};
+
 struct CorrelativeMatch {
   Pose2 pose;          ///< robot pose in the raster's (map) frame, on the lattice
   double score = 0.0;  ///< mean occupancy probability over the points, 0..1
@@ -91,9 +100,18 @@ class CorrelativeMatcher {
   ///         non-finite point or centre, or more than kMaxPointRotations
   ///         points × rotations (far points make the step fine: subsample, or
   ///         set angular_step_rad)
+  /// @param excluded  lattice poses whose translation lies in this disk are not candidates
   /// Concurrent calls are safe (no state changes).
   std::optional<CorrelativeMatch> match(std::span<const Eigen::Vector2d> points_robot, const Pose2& center,
-                                        double window_m, double window_rad, double min_score) const;
+                                        double window_m, double window_rad, double min_score,
+                                        const std::optional<ExcludedDisk>& excluded = std::nullopt) const;
+
+  /// A lattice pose outside `excluded` scoring ≥ min_score, the first the
+  /// search meets (not the best: it stops there, far sooner than match() when
+  /// many poses qualify); nullopt when none does. Same arguments and errors as match().
+  std::optional<CorrelativeMatch> firstAtLeast(std::span<const Eigen::Vector2d> points_robot, const Pose2& center,
+                                               double window_m, double window_rad, double min_score,
+                                               const std::optional<ExcludedDisk>& excluded = std::nullopt) const;
 
   /// The lattice match() would search (same validation, empty points allowed:
   /// then the extent-derived step is π).
@@ -106,6 +124,11 @@ class CorrelativeMatcher {
   struct Candidate;
   struct Rotation;
   struct RotationGroup;
+  struct Restriction;
+
+  std::optional<CorrelativeMatch> search(std::span<const Eigen::Vector2d> points_robot, const Pose2& center,
+                                         double window_m, double window_rad, double min_score,
+                                         const std::optional<ExcludedDisk>& excluded, bool first_only) const;
 
   std::vector<Rotation> discretise(std::span<const Eigen::Vector2d> points_robot, const Pose2& center,
                                    const SearchLattice& lattice) const;
@@ -122,7 +145,7 @@ class CorrelativeMatcher {
   static uint32_t needFor(double score, size_t points);
   /// Depth-first, best bound first, below `block` (level ≥ 1); `best` holds the best pose so far.
   void descend(const std::vector<Rotation>& rotations, const Candidate& block, int linear_steps, double min_score,
-               std::optional<Candidate>& best) const;
+               const Restriction& restriction, std::optional<Candidate>& best) const;
 
   /// Index of raster cell (x, y) in the padded layout of the pooled levels.
   int64_t index(int x, int y) const {

@@ -50,6 +50,8 @@ void LoopClosureOptions::validate() const {
               positive(loop_sigma_rad) && nonNegative(sequential_sigma_m_per_m) &&
               nonNegative(sequential_sigma_rad_per_m),
           "edge standard deviations must be finite and > 0 (their growth ≥ 0)");
+  require(std::isfinite(ambiguous_sigma_along_m) && ambiguous_sigma_along_m >= loop_sigma_m,
+          "ambiguous_sigma_along_m must be finite and ≥ loop_sigma_m");
   require(positive(max_loop_error_m) && positive(max_loop_error_rad), "max_loop_error_* must be > 0");
   require(cached_submaps >= 1, "cached_submaps must be ≥ 1");
   require(nonNegative(match_point_spacing_m), "match_point_spacing_m must be ≥ 0");
@@ -59,6 +61,11 @@ void LoopClosureOptions::validate() const {
           "submap.unknown_probability must be in [0, 1]");
   require(nonNegative(submap.max_refinement_shift_m) && nonNegative(submap.max_refinement_shift_rad),
           "submap.max_refinement_shift_* must be ≥ 0");
+  require(nonNegative(submap.ambiguity_radius_m) && nonNegative(submap.ambiguity_window_m) &&
+              submap.ambiguity_window_m <= 50.0 &&
+              submap.ambiguity_window_rad >= 0.0 && submap.ambiguity_window_rad <= 3.14159 &&
+              std::isfinite(submap.ambiguity_margin),
+          "submap.ambiguity_*: radius ≥ 0, window in [0, 50] m, window_rad in [0, π], a finite margin");
   submap.correlative.validate();
   graph.validate();
 }
@@ -176,10 +183,16 @@ void LoopCloser::search(std::vector<Keyframe>& keyframes, size_t query, Trajecto
         matcher(keyframes, s).match(kf.match_points, center, window_m, window_rad, options_.min_score);
     if (!m) continue;
     ++stats_.matches;
-    pending_.push_back({{query, anchor, m->score, m->pose},
-                        diagonalInformation(options_.loop_sigma_m, options_.loop_sigma_rad),
-                        keyframe_count_,
-                        false});
+    stats_.ambiguous += m->ambiguous();
+    Eigen::Matrix3d information = diagonalInformation(options_.loop_sigma_m, options_.loop_sigma_rad);
+    if (m->ambiguous()) {
+      // Along the rival's direction (anchor frame, the frame of the edge's
+      // translation residual) the match is only known to the ambiguity window.
+      const Eigen::Vector2d along = (m->rival_m - m->pose.translation()).normalized();
+      const double weak = std::pow(options_.loop_sigma_m / options_.ambiguous_sigma_along_m, 2);
+      information.topLeftCorner<2, 2>() -= (1.0 - weak) / std::pow(options_.loop_sigma_m, 2) * along * along.transpose();
+    }
+    pending_.push_back({{query, anchor, m->score, m->pose}, information, keyframe_count_, false});
   }
   stats_.search_s += secondsSince(t0);
 }

@@ -21,7 +21,13 @@
 ///     keyframe against another submap implying the same correction, within
 ///     support_keyframes;
 ///     unsupported ones are dropped;
-///  3. loop edges carry a Huber loss, and after each optimisation a loop edge
+///  3. an ambiguous match (another pose of the submap fits nearly as well: a
+///     corridor, repeated structure; see SubmapMatcherOptions::ambiguity_*)
+///     constrains the graph only weakly (ambiguous_sigma_along_m) along the
+///     direction of its rival: across a corridor it holds, along it the rest
+///     of the graph decides, and a match that slid along it is left off by
+///     more than max_loop_error_m after optimisation (check 4);
+///  4. loop edges carry a Huber loss, and after each optimisation a loop edge
 ///     still off by more than max_loop_error_m / _rad is disabled and the
 ///     graph optimised again.
 /// The graph is optimised when supported closures wait and either
@@ -82,6 +88,9 @@ struct LoopClosureOptions {
   double sequential_sigma_rad_per_m = 0.01;
   double loop_sigma_m = 0.05;
   double loop_sigma_rad = 0.02;
+  /// Standard deviation of an ambiguous closure along the direction of its
+  /// rival (m): about the ambiguity window, where the rival may be.
+  double ambiguous_sigma_along_m = 1.0;
   double max_loop_error_m = 0.3;    ///< after optimisation, loop edges further off are rejected
   double max_loop_error_rad = 0.1;
   int cached_submaps = 8;           ///< built submap matchers kept (each costs its raster and levels)
@@ -124,6 +133,7 @@ struct LoopClosure2d {
 struct LoopClosureStats {
   uint64_t searches = 0;       ///< correlative searches run (keyframe × candidate submap)
   uint64_t matches = 0;        ///< searches that found a verified match
+  uint64_t ambiguous = 0;      ///< of the matches, those with a rival (SubmapMatcherOptions::ambiguity_*)
   uint64_t accepted = 0;       ///< closures that entered the graph
   uint64_t unsupported = 0;    ///< dropped for lack of support
   uint64_t rejected_after_optimization = 0;

@@ -34,6 +34,16 @@ std::optional<SubmapMatch> SubmapMatcher::match(std::span<const Eigen::Vector2d>
   if (shift.translation().norm() > options_.max_refinement_shift_m ||
       std::abs(shift.theta_rad) > options_.max_refinement_shift_rad)
     return std::nullopt;
+  if (options_.ambiguity_margin > 0.0) {
+    const double floor = found->score - options_.ambiguity_margin;
+    const std::optional<CorrelativeMatch> rival = correlative_->firstAtLeast(
+        points, found->pose, options_.ambiguity_window_m, options_.ambiguity_window_rad, std::max(0.0, floor),
+        ExcludedDisk{found->pose.translation(), options_.ambiguity_radius_m});
+    if (rival) {
+      result.rival_score = rival->score;
+      result.rival_m = rival->pose.translation();
+    }
+  }
   return result;
 }
 

@@ -127,6 +127,58 @@ TEST(CorrelativeMatcher, EqualsBruteForceOnRandomRasters) {
   }
 }
 
+TEST(CorrelativeMatcher, AnExcludedDiskEqualsBruteForceOutsideIt) {
+  std::mt19937_64 rng(13);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int trial = 0; trial < 6; ++trial) {
+    const ProbabilityRaster raster = randomRaster(rng, 41, 33);
+    std::vector<Eigen::Vector2d> points;
+    for (int n = 0; n < 25; ++n) points.push_back({1.6 * u(rng), 1.6 * u(rng)});
+    const Pose2 center{1.3 + 0.3 * u(rng), 1.4 + 0.3 * u(rng), std::numbers::pi * u(rng)};
+    const double window_m = 0.65, window_rad = 0.2;
+    CorrelativeMatcherOptions options;
+    options.angular_step_rad = 0.07;
+    // The disk around the unrestricted best, so the answer must change.
+    const std::optional<CorrelativeMatch> best = CorrelativeMatcher(raster, options).match(points, center, window_m, window_rad, 0.0);
+    ASSERT_TRUE(best);
+    const ExcludedDisk disk{best->pose.translation() + Eigen::Vector2d(0.03 * u(rng), 0.03 * u(rng)), 0.1 + 0.1 * trial};
+    const SearchLattice lattice = CorrelativeMatcher(raster, options).lattice(points, window_m, window_rad);
+    double expected = -1.0;
+    for (int k = -lattice.angular_steps; k <= lattice.angular_steps; ++k)
+      for (int j = -lattice.linear_steps; j <= lattice.linear_steps; ++j)
+        for (int i = -lattice.linear_steps; i <= lattice.linear_steps; ++i) {
+          const Eigen::Vector2d t(center.x_m + i * raster.resolution_m, center.y_m + j * raster.resolution_m);
+          if ((t - disk.center_m).norm() <= disk.radius_m) continue;
+          expected = std::max(expected, latticeScore(raster, points, center,
+                                                     center.theta_rad + k * lattice.angular_step_rad, i, j));
+        }
+    for (int levels : {1, 2, 4, 7}) {
+      options.branch_levels = levels;
+      const std::optional<CorrelativeMatch> m =
+          CorrelativeMatcher(raster, options).match(points, center, window_m, window_rad, 0.0, disk);
+      ASSERT_TRUE(m) << "trial " << trial << " levels " << levels;
+      EXPECT_NEAR(m->score, expected, 1e-12) << "trial " << trial << " levels " << levels;
+      EXPECT_GT((m->pose.translation() - disk.center_m).norm(), disk.radius_m - 1e-9);
+      EXPECT_LT(m->score, best->score + 1e-12);
+      // The first pose reaching a score: outside the disk, reaching it, and none above the best outside.
+      const CorrelativeMatcher matcher(raster, options);
+      const std::optional<CorrelativeMatch> first =
+          matcher.firstAtLeast(points, center, window_m, window_rad, expected - 0.05, disk);
+      ASSERT_TRUE(first);
+      EXPECT_GE(first->score, expected - 0.05);
+      EXPECT_GT((first->pose.translation() - disk.center_m).norm(), disk.radius_m - 1e-9);
+      EXPECT_TRUE(matcher.firstAtLeast(points, center, window_m, window_rad, expected, disk));
+      EXPECT_FALSE(matcher.firstAtLeast(points, center, window_m, window_rad, std::nextafter(expected, 2.0), disk));
+    }
+  }
+  const CorrelativeMatcher matcher(randomRaster(rng, 20, 20));
+  const std::vector<Eigen::Vector2d> one{{0.5, 0.5}};
+  EXPECT_THROW(matcher.match(one, Pose2{1, 1, 0}, 0.3, 0.0, 0.0, ExcludedDisk{{1.0, 1.0}, -0.1}), std::invalid_argument);
+  EXPECT_THROW(matcher.match(one, Pose2{1, 1, 0}, 0.3, 0.0, 0.0, ExcludedDisk{{NAN, 1.0}, 0.1}), std::invalid_argument);
+  // A disk over the whole window leaves nothing.
+  EXPECT_FALSE(matcher.match(one, Pose2{1, 1, 0}, 0.3, 0.0, 0.0, ExcludedDisk{{1.0, 1.0}, 1.0}));
+}
+
 TEST(CorrelativeMatcher, RespectsMinScore) {
   std::mt19937_64 rng(9);
   std::uniform_real_distribution<double> u(-1.0, 1.0);

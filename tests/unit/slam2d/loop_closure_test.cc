@@ -127,6 +127,9 @@ TEST(LoopClosureOptions, BadOptionsThrow) {
   throws([](LoopClosureOptions& o) { o.optimize_every_keyframes = 0; });
   throws([](LoopClosureOptions& o) { o.graph.loss_scale = -1.0; });
   throws([](LoopClosureOptions& o) { o.submap.correlative.branch_levels = 0; });
+  throws([](LoopClosureOptions& o) { o.ambiguous_sigma_along_m = o.loop_sigma_m / 2; });
+  throws([](LoopClosureOptions& o) { o.submap.ambiguity_window_m = -1.0; });
+  throws([](LoopClosureOptions& o) { o.submap.ambiguity_margin = NAN; });
   // Off, options are still checked: turning it on later must not be the first time they are.
   throws([](LoopClosureOptions& o) {
     o.enabled = false;
