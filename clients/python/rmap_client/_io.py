@@ -9,7 +9,7 @@ import concurrent.futures
 import threading
 import urllib.parse
 from collections.abc import Coroutine
-from typing import Any, TypeVar
+from typing import Any, Self, TypeVar
 
 from websockets.exceptions import InvalidHandshake, InvalidURI
 from websockets.legacy.client import WebSocketClientProtocol, connect
@@ -132,3 +132,18 @@ async def open_websocket(url: str, token: str | None, timeout_s: float, max_fram
         raise RmapTimeout(f"{url}: no WebSocket upgrade within {timeout_s:g} s") from None
     except (OSError, InvalidHandshake, InvalidURI) as error:
         raise ConnectionClosed(f"{url}: {error}") from error
+
+
+class Session:
+    """``with`` support of the WebSocket clients (which define connect() and close()):
+    connects on entry unless connected already, closes on exit."""
+
+    _io: LoopThread | None
+
+    def __enter__(self) -> Self:
+        if self._io is None:
+            self.connect()  # type: ignore[attr-defined]
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()  # type: ignore[attr-defined]

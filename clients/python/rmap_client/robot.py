@@ -14,7 +14,7 @@ from websockets.exceptions import ConnectionClosed as _WebSocketClosed
 from websockets.legacy.client import WebSocketClientProtocol
 
 from . import proto
-from ._io import LoopThread, open_websocket, stream_url
+from ._io import LoopThread, Session, open_websocket, stream_url
 from .errors import ConnectionClosed, RmapTimeout, StreamError
 from .messages import robot_message
 
@@ -33,7 +33,7 @@ def _stream_error(error: proto.Error) -> StreamError:
     return StreamError(error.code, error.message, error.seq, error.fatal)
 
 
-class RobotClient:
+class RobotClient(Session):
     """One robot session: Hello, Welcome, then data messages acknowledged once durable.
 
     Sequence numbers continue after ``Welcome.last_durable_seq``, so a robot
@@ -94,8 +94,8 @@ class RobotClient:
         self.on_error: ErrorCallback | None = None
 
         self._io: LoopThread | None = None
-        self._ws: WebSocketClientProtocol | None = None
         self._outbox: asyncio.Queue[bytes | None] | None = None
+        self._tasks: list[asyncio.Task[None]] = []  # the reader and the writer
         self._send_lock = threading.Lock()  # frames leave in seq order
         self._cv = threading.Condition()
         self._welcome: proto.Welcome | None = None
@@ -239,14 +239,6 @@ class RobotClient:
         self._end(ConnectionClosed("closed by the client"))
         self._io.stop()
 
-    def __enter__(self) -> "RobotClient":
-        if self._io is None:
-            self.connect()
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.close()
-
     # ------------------------------------------------------------ I/O side
 
     async def _open(self) -> proto.Welcome:
@@ -268,17 +260,15 @@ class RobotClient:
         except BaseException:
             await ws.close()
             raise
-        self._ws = ws
         self._outbox = asyncio.Queue()
         with self._cv:
             self._welcome = reply.welcome
             self._next_seq = reply.welcome.last_durable_seq + 1
-        self._reader = asyncio.ensure_future(self._read(ws))
-        self._writer = asyncio.ensure_future(self._write(ws, self._outbox))
+        self._tasks = [asyncio.ensure_future(self._read(ws)), asyncio.ensure_future(self._write(ws, self._outbox))]
         return reply.welcome
 
     async def _closed(self) -> None:
-        await asyncio.wait([self._writer, self._reader])
+        await asyncio.wait(self._tasks)
 
     async def _write(self, ws: WebSocketClientProtocol, outbox: asyncio.Queue[bytes | None]) -> None:
         try:

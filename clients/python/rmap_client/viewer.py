@@ -14,8 +14,9 @@ from collections.abc import Callable, Iterator
 from typing import Any
 
 from websockets.exceptions import ConnectionClosed as _WebSocketClosed
+from websockets.legacy.client import WebSocketClientProtocol
 
-from ._io import LoopThread, open_websocket, stream_url
+from ._io import LoopThread, Session, open_websocket, stream_url
 from .errors import ConnectionClosed, RmapTimeout
 
 Frame = dict[str, Any]
@@ -23,7 +24,7 @@ Frame = dict[str, Any]
 _RESYNC: Frame = {"type": "resync"}
 
 
-class ViewerStream:
+class ViewerStream(Session):
     """Subscribes to a map's change notices (or every map's).
 
     Frames are queued as they arrive; a reader that falls more than
@@ -64,6 +65,7 @@ class ViewerStream:
         self._frames: queue.Queue[Frame | Exception] = queue.Queue()
         self._dropping = False
         self._io: LoopThread | None = None
+        self._ws: WebSocketClientProtocol | None = None
 
     def connect(self) -> Frame:
         """Opens the stream and returns its ``hello`` frame.
@@ -81,7 +83,7 @@ class ViewerStream:
                 self._timeout_s + 1.0,
                 self._url,
             )
-            self._reader = self._io.submit(self._read())
+            self._io.submit(self._read(self._ws))
             hello = self.next_frame()
         except BaseException:
             self._io.stop()
@@ -138,21 +140,13 @@ class ViewerStream:
         if self._io is None:
             return
         try:
-            self._io.run(self._ws.close(), self._timeout_s, "close")
+            if self._ws is not None:
+                self._io.run(self._ws.close(), self._timeout_s, "close")
         except RmapTimeout:
             pass
         self._io.stop()
 
-    def __enter__(self) -> "ViewerStream":
-        if self._io is None:
-            self.connect()
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.close()
-
-    async def _read(self) -> None:
-        ws = self._ws
+    async def _read(self, ws: WebSocketClientProtocol) -> None:
         try:
             async for text in ws:
                 try:

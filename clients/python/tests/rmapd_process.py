@@ -13,6 +13,7 @@ import signal
 import subprocess
 import tempfile
 import time
+import unittest
 from pathlib import Path
 
 
@@ -76,3 +77,18 @@ class Rmapd:
             self._process.stdout.close()
         self._dir.cleanup()
         return code
+
+
+class RmapdTestCase(unittest.TestCase):
+    """Test cases sharing one rmapd per class, started with the class's ``config_yaml``."""
+
+    config_yaml = ""
+    rmapd: Rmapd
+
+    @classmethod
+    def setUpClass(cls) -> None:
+        cls.rmapd = Rmapd(cls.config_yaml)
+
+    @classmethod
+    def tearDownClass(cls) -> None:
+        cls.rmapd.stop()

@@ -20,7 +20,7 @@ from rmap_client import (
 )
 from rmap_client.sim import BoxRoom
 
-from rmapd_process import Rmapd
+from rmapd_process import RmapdTestCase
 
 ROOM = BoxRoom()
 SENSOR_M = (0.0, 0.0, 1.2)
@@ -30,15 +30,11 @@ def room_cloud():
     return point_cloud(ROOM.lidar_cloud(SENSOR_M), pose3(SENSOR_M))
 
 
-class BadInputTest(unittest.TestCase):
-    @classmethod
-    def setUpClass(cls) -> None:
-        cls.rmapd = Rmapd("limits:\n  max_frame_bytes: 400000\n  max_batch_points: 1000\n")
-        cls.maps = MapClient(cls.rmapd.http_url)
+class BadInputTest(RmapdTestCase):
+    config_yaml = "limits:\n  max_frame_bytes: 400000\n  max_batch_points: 1000\n"
 
-    @classmethod
-    def tearDownClass(cls) -> None:
-        cls.rmapd.stop()
+    def setUp(self) -> None:
+        self.maps = MapClient(self.rmapd.http_url)
 
     def test_a_refused_cloud_gets_an_error_and_changes_nothing(self) -> None:
         errors = []
@@ -130,18 +126,12 @@ class BadInputTest(unittest.TestCase):
             MapClient("ftp://127.0.0.1:8080")
 
 
-class TokenTest(unittest.TestCase):
-    @classmethod
-    def setUpClass(cls) -> None:
-        cls.rmapd = Rmapd(
-            "auth:\n  tokens:\n"
-            "    - {token: robot-secret-01, role: robot, robot_id: bot-1}\n"
-            "    - {token: viewer-secret-1, role: viewer}\n"
-        )
-
-    @classmethod
-    def tearDownClass(cls) -> None:
-        cls.rmapd.stop()
+class TokenTest(RmapdTestCase):
+    config_yaml = (
+        "auth:\n  tokens:\n"
+        "    - {token: robot-secret-01, role: robot, robot_id: bot-1}\n"
+        "    - {token: viewer-secret-1, role: viewer}\n"
+    )
 
     def test_roles_are_enforced(self) -> None:
         url = self.rmapd.ws_url

@@ -14,22 +14,14 @@ import unittest
 from rmap_client import MapClient, RobotClient, laser_scan, planar_pose3, pose2, sensor, yaw_rad
 from rmap_client.sim import DriftingOdometry, Laser2d, PillarRoom, compose2, tour
 
-from rmapd_process import Rmapd
+from rmapd_process import RmapdTestCase
 
 MOUNT_FORWARD_M = 0.15
 MOUNT_HEIGHT_M = 0.5
 STEP_NS = 100_000_000
 
 
-class Laser2dRobotTest(unittest.TestCase):
-    @classmethod
-    def setUpClass(cls) -> None:
-        cls.rmapd = Rmapd()
-
-    @classmethod
-    def tearDownClass(cls) -> None:
-        cls.rmapd.stop()
-
+class Laser2dRobotTest(RmapdTestCase):
     def test_pose_estimates_follow_the_truth_and_the_scans_make_the_maps(self) -> None:
         room, laser = PillarRoom(), Laser2d()
         truth_path = tour([(1.5, 1.5), (8.5, 1.5), (8.5, 4.5), (4.5, 4.5), (4.5, 1.5), (1.5, 1.5)])

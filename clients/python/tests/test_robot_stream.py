@@ -10,21 +10,13 @@ import unittest
 from rmap_client import MapClient, RobotClient, ViewerStream, point_cloud, pose3, sensor
 from rmap_client.sim import BoxRoom
 
-from rmapd_process import Rmapd
+from rmapd_process import RmapdTestCase
 
 ROOM = BoxRoom()
 SENSORS_M = [(0.0, 0.0, 1.2), (2.0, 1.5, 1.0), (-1.0, 2.0, 1.5), (3.0, -0.5, 0.8)]
 
 
-class RobotStreamTest(unittest.TestCase):
-    @classmethod
-    def setUpClass(cls) -> None:
-        cls.rmapd = Rmapd()
-
-    @classmethod
-    def tearDownClass(cls) -> None:
-        cls.rmapd.stop()
-
+class RobotStreamTest(RmapdTestCase):
     def stream_room(self, robot_id: str, map_name: str) -> tuple[RobotClient, list[int], list[int]]:
         """Streams one cloud per sensor position; returns the client, the sent and the acked seqs."""
         lidar = sensor("lidar", "LIDAR_3D", "box-room-lidar")
