@@ -10,6 +10,7 @@ import threading
 import time
 from collections.abc import Callable, Sequence
 
+from google.protobuf.message import DecodeError
 from websockets.exceptions import ConnectionClosed as _WebSocketClosed
 from websockets.legacy.client import WebSocketClientProtocol
 
@@ -31,6 +32,18 @@ Body = proto.RobotMessage | proto.PointCloud | proto.LaserScan2D | proto.CameraI
 
 def _stream_error(error: proto.Error) -> StreamError:
     return StreamError(error.code, error.message, error.seq, error.fatal)
+
+
+def _parse_reply(frame: bytes | str) -> proto.ServerMessage | None:
+    """The ServerMessage of a binary frame; None for anything else."""
+    if not isinstance(frame, bytes):
+        return None
+    reply = proto.ServerMessage()
+    try:
+        reply.ParseFromString(frame)
+    except DecodeError:
+        return None
+    return reply
 
 
 class RobotClient(Session):
@@ -249,8 +262,9 @@ class RobotClient(Session):
                 frame = await ws.recv()
             except _WebSocketClosed as closed:
                 raise ConnectionClosed(f"{self._url}: closed before Welcome ({closed})", closed.code, closed.reason)
-            reply = proto.ServerMessage()
-            reply.ParseFromString(frame if isinstance(frame, bytes) else frame.encode())
+            reply = _parse_reply(frame)
+            if reply is None:
+                raise ConnectionClosed(f"{self._url}: the server's first frame is not a ServerMessage")
             if reply.HasField("error"):
                 with self._cv:
                     self._last_error = reply.error
@@ -275,16 +289,14 @@ class RobotClient(Session):
             while (data := await outbox.get()) is not None:
                 await ws.send(data)
             await ws.close()
-        except _WebSocketClosed:
-            pass  # the reader reports why
+        except (_WebSocketClosed, OSError):
+            pass  # the reader reports why the connection ended
 
     async def _read(self, ws: WebSocketClientProtocol) -> None:
         try:
             async for frame in ws:
-                reply = proto.ServerMessage()
-                try:
-                    reply.ParseFromString(frame if isinstance(frame, bytes) else frame.encode())
-                except Exception:  # protobuf's DecodeError
+                reply = _parse_reply(frame)
+                if reply is None:
                     self._end(ConnectionClosed("the server sent a frame that is not a ServerMessage"))
                     await ws.close()
                     return
