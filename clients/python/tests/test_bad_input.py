@@ -15,6 +15,7 @@ from rmap_client import (
     RobotClient,
     StreamError,
     ViewerStream,
+    camera_image,
     point_cloud,
     pose3,
 )
@@ -54,6 +55,13 @@ class BadInputTest(RmapdTestCase):
         self.assertEqual(self.maps.occupancy("bad", (9.0, 9.0, 9.0)).state, "unknown")
         self.assertEqual(self.maps.occupancy("bad", (ROOM.max_m[0], 0.5, 1.0)).state, "occupied")
         self.assertEqual(self.maps.robot("py-bad")["last_seq"], good_seq)
+
+    def test_a_refused_image_is_reported_with_its_seq(self) -> None:
+        with RobotClient(self.rmapd.ws_url, "py-bad-image", "bad") as robot:
+            seq = robot.send(camera_image(b"not a jpeg", "JPEG"))
+            self.assertTrue(robot.wait_all_acked(30))
+            self.assertEqual((robot.acked_count, robot.refused_count), (0, 1))
+            self.assertEqual((robot.last_error.code, robot.last_error.seq), ("invalid_message", seq))
 
     def test_a_bad_hello_is_refused_with_a_fatal_error(self) -> None:
         robot = RobotClient(self.rmapd.ws_url, "not a valid id", "bad")

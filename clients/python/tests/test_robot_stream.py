@@ -7,7 +7,18 @@ from __future__ import annotations
 import threading
 import unittest
 
-from rmap_client import MapClient, RobotClient, ViewerStream, point_cloud, pose3, sensor
+from rmap_client import (
+    MapClient,
+    RobotClient,
+    ViewerStream,
+    camera_image,
+    odometry,
+    planar_pose3,
+    point_cloud,
+    pose3,
+    proto,
+    sensor,
+)
 from rmap_client.sim import BoxRoom
 
 from rmapd_process import RmapdTestCase
@@ -110,6 +121,23 @@ class RobotStreamTest(RmapdTestCase):
         self.assertEqual(robot["last_seq"], sent[-1] + 1)
         self.assertFalse(robot["connected"])
         self.assertEqual(robot["sensors"], [])  # the second Hello declared none
+
+    def test_images_and_odometry_are_acked_and_a_posed_image_places_the_robot(self) -> None:
+        pixels = bytes((x * 7 + y * 13) % 256 for y in range(48) for x in range(64))
+        camera_pose = planar_pose3(1.5, -0.5, 0.3, z_m=1.1)
+        with RobotClient(self.rmapd.ws_url, "py-camera", "camera") as robot:
+            robot.send(odometry(pose3((0.2, 0.1, 0.0)), stamp_ns=10))
+            robot.send(camera_image(pixels, "MONO8", width=64, height=48, camera_pose=camera_pose, stamp_ns=20))
+            self.assertTrue(robot.wait_all_acked(30))
+            self.assertEqual((robot.acked_count, robot.refused_count), (2, 0))
+            with self.assertRaisesRegex(TypeError, "not a robot message body"):
+                robot.send(proto.Pose3())
+        pose = MapClient(self.rmapd.http_url).robot("py-camera")["pose"]
+        self.assertEqual(pose["seq"], 2)
+        self.assertEqual(pose["stamp_ns"], 20)
+        for axis, value in enumerate((1.5, -0.5, 1.1)):
+            self.assertAlmostEqual(pose["position"][axis], value, places=6)
+        self.assertAlmostEqual(pose["orientation"][3], camera_pose.orientation.z, places=6)
 
     def test_the_viewer_stream_announces_changed_tiles_and_poses(self) -> None:
         with ViewerStream(self.rmapd.ws_url) as viewer:  # every map: "watched" does not exist yet
