@@ -6,7 +6,6 @@ Units: metres, radians, nanoseconds (``stamp_ns``, Unix time); quaternions are
 
 from __future__ import annotations
 
-import itertools
 import math
 import time
 from collections.abc import Iterable, Sequence
@@ -82,7 +81,14 @@ def point_cloud(
     """
     cloud = proto.PointCloud(sensor=sensor_name, stamp_ns=_stamp(stamp_ns), frame=proto.PointCloud.Frame.Value(frame.upper()))
     cloud.sensor_pose.CopyFrom(sensor_pose)
-    cloud.xyz_m.extend(itertools.chain.from_iterable(points_m))
+    flat: list[float] = []
+    count = 0
+    for point in points_m:
+        flat.extend(point)
+        count += 1
+    if len(flat) != 3 * count:
+        raise ValueError("points_m must hold (x, y, z) triples")
+    cloud.xyz_m.extend(flat)
     if intensities is not None:
         cloud.intensities.extend(intensities)
     return cloud

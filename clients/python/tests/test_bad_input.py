@@ -95,6 +95,8 @@ class BadInputTest(RmapdTestCase):
             huge = point_cloud([(1.0, 1.0, 1.0)] * 40000, pose3(SENSOR_M))
             with self.assertRaisesRegex(ValueError, "exceeds the server's max_frame_bytes"):
                 robot.send(huge)
+            with self.assertRaisesRegex(ValueError, r"\(x, y, z\) triples"):
+                point_cloud([(1.0, 2.0, 3.0), (1.0, 2.0)], pose3(SENSOR_M))
             self.assertEqual(robot.send(room_cloud()), 1)  # the refused one took no seq
             self.assertTrue(robot.wait_all_acked(30))
 
