@@ -85,11 +85,11 @@ class ViewerStream(Session):
             )
             self._io.submit(self._read(self._ws))
             hello = self.next_frame()
+            if hello.get("type") != "hello":
+                raise ConnectionClosed(f"{self._url}: the first frame is not a hello: {hello}")
         except BaseException:
-            self._io.stop()
+            self.close()
             raise
-        if hello.get("type") != "hello":
-            raise ConnectionClosed(f"{self._url}: the first frame is not a hello: {hello}")
         return hello
 
     def next_frame(self, timeout_s: float | None = None) -> Frame:
