@@ -61,8 +61,8 @@ class RobotClient(Session):
     ``wait_all_acked()`` or ``close()``. Set them before ``connect()``.
 
     One session per instance: to reconnect, make a new client with the same
-    robot id (resend unacknowledged messages yourself; those the server
-    already held are acked as duplicates).
+    robot id and resend() the messages that were never acknowledged (those
+    the server held already are acked as duplicates).
 
     Example::
 
@@ -148,9 +148,9 @@ class RobotClient(Session):
     def send(self, message: Body) -> int:
         """Numbers a message with the next sequence number, queues it and returns that number.
 
-        ``message`` is a RobotMessage or its body (PointCloud, LaserScan2D,
-        CameraImage, Odometry; see the builders in rmap_client.messages).
-        Blocks while ``max_in_flight`` messages are unanswered.
+        ``message`` is a RobotMessage (its ``seq`` is set) or its body
+        (PointCloud, LaserScan2D, CameraImage, Odometry; see the builders in
+        rmap_client.messages). Blocks while ``max_in_flight`` messages are unanswered.
 
         Raises:
             ValueError: the frame would exceed ``Welcome.max_frame_bytes``
@@ -159,6 +159,22 @@ class RobotClient(Session):
             RmapTimeout: the window stayed full for ``timeout_s``
         """
         framed = message if isinstance(message, proto.RobotMessage) else robot_message(message)
+        return self._queue(framed, None)
+
+    def resend(self, message: proto.RobotMessage) -> int:
+        """Sends a message of an earlier session again, with its own ``seq`` (docs/API.md §5.10).
+
+        One the server holds already is acked with ``duplicate`` set and not
+        applied twice; one it does not hold (it was never acked) is stored and
+        applied. Later send() calls continue after the highest seq used.
+        Raises as send() does, and ValueError for a seq < 1 or one in flight.
+        """
+        if message.seq < 1:
+            raise ValueError("resend() needs the message's original seq (>= 1)")
+        return self._queue(message, message.seq)
+
+    def _queue(self, framed: proto.RobotMessage, seq: int | None) -> int:
+        """Numbers (unless ``seq`` is given) and queues a message, within the in-flight window."""
         if framed.HasField("hello"):
             raise ValueError("the Hello is sent by connect()")
         welcome = self.welcome
@@ -174,7 +190,10 @@ class RobotClient(Session):
                     self._cv.wait(left)
                 if self._failure is not None:
                     raise self._failure
-                seq = self._next_seq
+                if seq is None:
+                    seq = self._next_seq
+                elif seq in self._in_flight:
+                    raise ValueError(f"seq {seq} is in flight already")
             framed.seq = seq
             data = framed.SerializeToString()
             if welcome.max_frame_bytes and len(data) > welcome.max_frame_bytes:
@@ -182,7 +201,7 @@ class RobotClient(Session):
                     f"message of {len(data)} bytes exceeds the server's max_frame_bytes ({welcome.max_frame_bytes})"
                 )
             with self._cv:
-                self._next_seq = seq + 1
+                self._next_seq = max(self._next_seq, seq + 1)
                 self._in_flight[seq] = time.monotonic()
             assert self._io is not None and self._outbox is not None
             self._io.loop.call_soon_threadsafe(self._outbox.put_nowait, data)

@@ -19,6 +19,7 @@ from rmap_client import (
     proto,
     sensor,
 )
+from rmap_client.messages import robot_message
 from rmap_client.sim import BoxRoom
 
 from rmapd_process import RmapdTestCase
@@ -111,14 +112,26 @@ class RobotStreamTest(RmapdTestCase):
     def test_a_reconnecting_robot_continues_after_the_last_durable_seq(self) -> None:
         first, sent, _ = self.stream_room("py-again", "again")
         first.close()
-        with RobotClient(self.rmapd.ws_url, "py-again", "again") as second:
+        second = RobotClient(self.rmapd.ws_url, "py-again", "again")
+        duplicates = []
+        second.on_ack = lambda ack, latency_s: duplicates.append((ack.seq, ack.duplicate))
+        with second:
             self.assertEqual(second.welcome.last_durable_seq, sent[-1])
             seq = second.send(point_cloud(ROOM.lidar_cloud((0.5, 0.5, 1.0)), pose3((0.5, 0.5, 1.0))))
             self.assertEqual(seq, sent[-1] + 1)
+            # A message of the first session sent again with its seq: acked as a duplicate,
+            # whatever it holds, and not applied (it would mark a point far outside the room).
+            again = robot_message(point_cloud([(30.0, 30.0, 1.0)], pose3(SENSORS_M[1])))
+            again.seq = sent[1]
+            self.assertEqual(second.resend(again), sent[1])
             self.assertTrue(second.wait_all_acked(30))
-            self.assertEqual(second.acked_count, 1)
+            self.assertEqual(second.acked_count, 2)
+            self.assertEqual(second.send(point_cloud([(1.0, 1.0, 1.0)], pose3(SENSORS_M[0]))), seq + 1)
+            self.assertTrue(second.wait_all_acked(30))
+        self.assertEqual(sorted(duplicates), [(sent[1], True), (seq, False), (seq + 1, False)])
+        self.assertEqual(MapClient(self.rmapd.http_url).occupancy("again", (30.0, 30.0, 1.0)).state, "unknown")
         robot = MapClient(self.rmapd.http_url).robot("py-again")
-        self.assertEqual(robot["last_seq"], sent[-1] + 1)
+        self.assertEqual(robot["last_seq"], sent[-1] + 2)
         self.assertFalse(robot["connected"])
         self.assertEqual(robot["sensors"], [])  # the second Hello declared none
 
