@@ -208,11 +208,11 @@ json check2d(const ReplayCheckOptions& o, client::HttpClient& http, bool& equal)
   equal = pgm_equal && server_yaml == offline_yaml && matched == offline.size() && poses.size() == offline.size() &&
           max_pose_diff_m <= tolerance_m;
   std::printf("2D %s: %zu scans (%zu refused offline), %zu keyframes; map_server export: PGM %zu bytes, %s (%zu "
-              "bytes differ), YAML %s; trajectory %zu/%zu poses at the same stamps, max position difference %.4f m "
+              "bytes differ), YAML %s; trajectory %zu/%zu poses at the same stamps (server %zu), max position difference %.4f m "
               "(rmapd rewrites poses moved by >= %.3f m) -> %s\n",
               o.log_path.c_str(), data.inputs.size(), rejected, slam.keyframeCount(), server_pgm.size(),
               pgm_equal ? "identical" : "DIFFERENT", differing, server_yaml == offline_yaml ? "identical" : "DIFFERENT",
-              matched, offline.size(), max_pose_diff_m, tolerance_m, equal ? "EQUAL" : "DIFFERENT");
+              matched, offline.size(), poses.size(), max_pose_diff_m, tolerance_m, equal ? "EQUAL" : "DIFFERENT");
   return {{"log", o.log_path},
           {"scans", data.inputs.size()},
           {"refused_offline", rejected},

@@ -30,7 +30,7 @@ struct ReplayCheckOptions {
   double resolution_m = 0.1;
   int grid_step_cells = 4;
   std::string log_path;     ///< a CARMEN log (loadSlam2dDataset), or empty
-  std::string robot_id;     ///< the replayed robot (2D trajectory)
+  std::string robot_id;     ///< the replayed robot (2D trajectory); it must have streamed into this map only
   std::string json_out;
   std::string shared_data_dir;
 };

@@ -15,6 +15,7 @@
 #include <fstream>
 #include <numbers>
 #include <sstream>
+#include <thread>
 
 #include "api_helpers.h"
 #include "client/http_client.h"
@@ -215,7 +216,8 @@ class ReplayTest : public ::testing::Test {
 std::unique_ptr<TempDir> ReplayTest::data_;
 std::unique_ptr<RmapdProcess> ReplayTest::rmapd_;
 
-TEST_F(ReplayTest, XyzTextWithNodes) {
+/// The wall as a scan.dat-style text with a NODE line per pose.
+std::string wallXyzText() {
   std::ostringstream text;
   for (int i = 0; i < 2; ++i) {
     const Eigen::Isometry3d pose = sensorPose(i);
@@ -223,7 +225,11 @@ TEST_F(ReplayTest, XyzTextWithNodes) {
          << " 0 0 " << (i ? 0.2 : 0.0) << "\n";
     for (const Eigen::Vector3d& p : sensorPoints(i)) text << p.x() << ' ' << p.y() << ' ' << p.z() << "\n";
   }
-  const fs::path file = write("wall.dat", text.str());
+  return text.str();
+}
+
+TEST_F(ReplayTest, XyzTextWithNodes) {
+  const fs::path file = write("wall.dat", wallXyzText());
   expectReplayed(args("xyz") + " " + file.string(), 2);
   EXPECT_EQ(summary()["points"], 2 * wallPoints().size());
   expectWall("xyz");
@@ -379,6 +385,48 @@ TEST_F(ReplayTest, RefusedMessagesFailTheReplay) {
   EXPECT_EQ(s["messages_acked"], 0);
   EXPECT_NE(run.out.find("server error: invalid_message"), std::string::npos) << run.out;
 }
+#ifdef RMAP_BENCH_PATH
+/// `rmap-bench replay-check ARGS` against the test's rmapd: its exit code, stdout in `out`.
+int replayCheck(const fs::path& dir, const std::string& args, std::string& out) {
+  const fs::path file = dir / "check.out";
+  const std::string command = std::string(RMAP_BENCH_PATH) + " replay-check " + args + " >" + file.string() + " 2>&1";
+  const int status = std::system(command.c_str());
+  out = readText(file);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+// The small version of bench/replay_equivalence.sh: the replayed maps are the offline builds.
+TEST_F(ReplayTest, ReplayedMapsEqualTheOfflineBuilds) {
+  const fs::path wall = write("wall.dat", wallXyzText());
+  expectReplayed(args("eq3d") + " " + wall.string(), 2);
+  const fs::path log = write("room.log", boxRoomLog());
+  expectReplayed("--server " + rmapd_->wsUrl() + " --map eq2d --robot eqroom --json " + (dir_->path() / "summary.json").string() +
+                     " " + log.string(),
+                 6);
+  std::this_thread::sleep_for(std::chrono::milliseconds(800));  // trajectory poses are written every 0.5 s
+  std::string out;
+  EXPECT_EQ(replayCheck(dir_->path(), "--server " + rmapd_->httpUrl() + " --map eq3d --resolution 0.1 --grid-step 1 --scans " +
+                                          wall.string(), out), 0) << out;
+  EXPECT_NE(out.find("-> EQUAL"), std::string::npos) << out;
+  EXPECT_EQ(replayCheck(dir_->path(), "--server " + rmapd_->httpUrl() + " --map eq2d --robot eqroom --log " + log.string(), out), 0)
+      << out;
+  EXPECT_NE(out.find("PGM"), std::string::npos) << out;
+  // And it can tell maps apart: the wall is not the room.
+  EXPECT_EQ(replayCheck(dir_->path(), "--server " + rmapd_->httpUrl() + " --map eq2d --resolution 0.1 --scans " + wall.string(), out), 1)
+      << out;
+}
+
+TEST_F(ReplayTest, ScanDatEqualsTheOfflineBuild) {
+  const std::string scans = std::string(RMAP_SHARED_DATA_DIR) + "/octomap/scan.dat.bz2";
+  if (!fs::exists(scans)) GTEST_SKIP() << scans << " not found";
+  expectReplayed("--server " + rmapd_->wsUrl() + " --map scandat --resolution 0.1 --json " +
+                     (dir_->path() / "summary.json").string() + " " + scans,
+                 1);
+  std::string out;
+  EXPECT_EQ(replayCheck(dir_->path(), "--server " + rmapd_->httpUrl() + " --map scandat --resolution 0.1 --scans " + scans, out), 0)
+      << out;
+}
+#endif
 #else
 TEST(ReplayTest, NeedsTheCli) { GTEST_SKIP() << "the rmap CLI is not built"; }
 #endif
