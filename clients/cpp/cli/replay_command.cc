@@ -22,6 +22,7 @@ void addReplayCommand(CLI::App& app, int& exit_code) {
     std::string json_out;
     double resolution_m = 0.0;
     size_t max_in_flight = 64;
+    double max_rate = 1000.0;
     double timeout_s = 60.0;
     bool quiet = false;
     ReplaySourceOptions source;
@@ -56,6 +57,10 @@ void addReplayCommand(CLI::App& app, int& exit_code) {
   replay->add_option("--max-in-flight", args->max_in_flight, "unacknowledged messages at most")
       ->check(CLI::Range(1, 100000))
       ->capture_default_str();
+  replay->add_option("--max-rate", args->max_rate,
+                     "messages per second at most (rmapd refuses more than 2000/s per robot by default)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
   replay->add_option("--timeout", args->timeout_s, "seconds to wait for the connection and for acks")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
@@ -82,6 +87,7 @@ void addReplayCommand(CLI::App& app, int& exit_code) {
     options.resolution_m = args->resolution_m;
     options.rate = args->rate == "realtime" ? ReplayRate::kRealtime : ReplayRate::kMax;
     options.max_in_flight = args->max_in_flight;
+    options.max_messages_per_s = args->max_rate;
     options.timeout = std::chrono::milliseconds(static_cast<int64_t>(args->timeout_s * 1000.0));
     if (source.reads_per_frame) {
       source.notes.push_back("frames are read one file at a time; each file is parsed whole before it is sent");

@@ -7,6 +7,9 @@
 namespace rmap::cli {
 namespace {
 
+/// ANSI "erase to the end of the line": a shorter redraw leaves nothing of the longer one behind.
+constexpr const char* kClearToEnd = "\033[K";
+
 double fraction(const ReplayProgressState& s) {
   return s.total ? static_cast<double>(s.acked) / static_cast<double>(s.total) : 1.0;
 }
@@ -60,7 +63,7 @@ void ReplayProgress::update(size_t sent, size_t acked) {
   if (terminal_) {
     if (now - last_draw_ < std::chrono::milliseconds(100)) return;
     last_draw_ = now;
-    out_ << "\r" << progressBar(state(sent, acked)) << std::flush;
+    out_ << "\r" << progressBar(state(sent, acked)) << kClearToEnd << std::flush;
     return;
   }
   const size_t tenth = total_ ? acked * 10 / total_ : 10;
@@ -72,7 +75,7 @@ void ReplayProgress::update(size_t sent, size_t acked) {
 
 void ReplayProgress::finish(size_t sent, size_t acked) {
   if (terminal_) {
-    out_ << "\r" << progressBar(state(sent, acked)) << "\n" << std::flush;
+    out_ << "\r" << progressBar(state(sent, acked)) << kClearToEnd << "\n" << std::flush;
   } else {
     out_ << progressLine(state(sent, acked)) << "\n" << std::flush;
   }

@@ -122,6 +122,9 @@ ReplaySummary runReplay(const ReplaySource& source, const ReplayOptions& options
       if (options.rate == ReplayRate::kRealtime && frame.stamp_ns > first_stamp) {
         std::this_thread::sleep_until(start + std::chrono::nanoseconds(frame.stamp_ns - first_stamp));
       }
+      // The server's per-robot rate limit refuses messages in a burst above it.
+      std::this_thread::sleep_until(start + std::chrono::nanoseconds(static_cast<int64_t>(
+                                                static_cast<double>(i) * 1e9 / options.max_messages_per_s)));
       const auto body = frame.message.body_case();
       try {
         robot.send(std::move(frame.message));

@@ -28,6 +28,9 @@ struct ReplayOptions {
   double resolution_m = 0.0;   ///< for a new map; 0: the server's default
   ReplayRate rate = ReplayRate::kMax;
   size_t max_in_flight = 64;   ///< unacknowledged messages at most
+  /// Messages per second at most, whatever the rate: rmapd refuses a robot's messages beyond
+  /// its limits.max_messages_per_s_per_robot (2000/s by default) as rate_limited.
+  double max_messages_per_s = 1000.0;
   std::chrono::milliseconds timeout{60000};  ///< connect, and each wait for acks
 };
 
