@@ -28,8 +28,10 @@ double etaSeconds(const ReplayProgressState& s) {
 std::string progressBar(const ReplayProgressState& s, int bar_width) {
   const double f = std::clamp(fraction(s), 0.0, 1.0);
   const int filled = static_cast<int>(std::floor(f * bar_width));
-  std::string bar = "[" + std::string(static_cast<size_t>(filled), '#') +
-                    std::string(static_cast<size_t>(bar_width - filled), '.') + "]";
+  std::string bar(static_cast<size_t>(bar_width) + 2, '.');
+  bar.front() = '[';
+  bar.back() = ']';
+  std::fill_n(bar.begin() + 1, filled, '#');
   char eta[32];
   const double e = etaSeconds(s);
   if (e < 0.0) {

@@ -16,30 +16,10 @@
 #include <string>
 #include <vector>
 
+#include "cli/replay_format.h"
 #include "rmap/v1/robot_stream.pb.h"
 
 namespace rmap::cli {
-
-enum class ReplayFormat { kCarmen, kOctomapGraph, kXyzText, kVelodyneBin, kPly, kPcd, kUos3dtk, kImages };
-
-/// The names --format takes: carmen, graph, xyz, kitti, ply, pcd, 3dtk, images.
-const std::vector<std::string>& replayFormatNames();
-const char* toString(ReplayFormat format);
-/// @throws std::invalid_argument for another name
-ReplayFormat parseReplayFormat(const std::string& name);
-
-/// The format of FILE arguments from their names (compression suffixes
-/// .gz/.bz2 looked through) or, for folders, from what they hold: a 3DTK
-/// folder has scan000.3d; otherwise the one kind of frame file it holds
-/// (.bin, .ply, .pcd or images). A `.log` or `.txt` file is CARMEN when its
-/// first message line is a CARMEN message, else a `scan.dat` text cloud.
-/// @throws std::runtime_error naming the file when no format fits or files disagree
-ReplayFormat detectReplayFormat(const std::vector<std::string>& paths);
-
-/// The robot id a replay uses by default: the first path's name without
-/// directories and extensions (.log.gz → ""), characters outside
-/// [A-Za-z0-9._-] replaced by '-', at most 64 characters; "replay" if empty.
-std::string defaultRobotId(const std::string& path);
 
 struct ReplaySourceOptions {
   /// Poses of the frames (KITTI 3×4 or TUM lines, see datasets/pose_file.h),

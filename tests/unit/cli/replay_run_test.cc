@@ -46,11 +46,9 @@ TEST(ReplayRun, UnreachableServerIsAFailureNotAThrow) {
     ADD_FAILURE() << "no frame is read before the connection is up";
     return ReplayFrame{};
   };
-  ReplayOptions options;
-  options.server_url = "ws://127.0.0.1:1";  // nothing listens on port 1
-  options.map = "m";
-  options.robot_id = "r";
-  options.timeout = std::chrono::milliseconds(2000);
+  // Nothing listens on port 1.
+  const ReplayOptions options{.server_url = "ws://127.0.0.1:1", .token = {}, .map = "m", .robot_id = "r",
+                              .timeout = std::chrono::milliseconds(2000)};
   const ReplaySummary s = runReplay(source, options, nullptr);
   EXPECT_FALSE(s.ok());
   EXPECT_EQ(s.sent, 0u);
