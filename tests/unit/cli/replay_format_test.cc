@@ -1,31 +1,17 @@
 #include "cli/replay_format.h"
 
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <filesystem>
-#include <fstream>
+
+#include "temp_files.h"
 
 namespace rmap::cli {
 namespace {
 
 namespace fs = std::filesystem;
 
-class ReplayFormatTest : public ::testing::Test {
- protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("rmap_replay_format_test_" + std::to_string(::getpid()));
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  std::string write(const std::string& name, const std::string& content) {
-    const fs::path p = dir_ / name;
-    fs::create_directories(p.parent_path());
-    std::ofstream(p, std::ios::binary) << content;
-    return p.string();
-  }
-  fs::path dir_;
-};
+using ReplayFormatTest = TempFilesTest;
 
 TEST_F(ReplayFormatTest, DetectsFormatsByNameAndFolder) {
   EXPECT_EQ(detectReplayFormat({write("a.log.gz", "")}), ReplayFormat::kCarmen);

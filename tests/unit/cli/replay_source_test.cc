@@ -1,33 +1,19 @@
 #include "cli/replay_source.h"
 
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 #include <sstream>
+
+#include "temp_files.h"
 
 namespace rmap::cli {
 namespace {
 
 namespace fs = std::filesystem;
 
-class ReplaySourceTest : public ::testing::Test {
- protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("rmap_replay_source_test_" + std::to_string(::getpid()));
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  std::string write(const std::string& name, const std::string& content) {
-    const fs::path p = dir_ / name;
-    fs::create_directories(p.parent_path());
-    std::ofstream(p, std::ios::binary) << content;
-    return p.string();
-  }
-  fs::path dir_;
-};
+using ReplaySourceTest = TempFilesTest;
 
 /// A FLASER line of `n` beams at `range` with one error reading (0) first.
 std::string flaser(int n, double range, double x, double stamp) {
