@@ -8,4 +8,7 @@
 
 namespace rmap::cli {
 
+/// `rmap replay`: datasets on disk streamed to rmapd as one robot (replay_command.cc).
+void addReplayCommand(CLI::App& app, int& exit_code);
+
 }  // namespace rmap::cli
