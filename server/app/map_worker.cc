@@ -21,6 +21,10 @@ namespace {
 using Clock = std::chrono::steady_clock;
 constexpr auto kPoseFlushPeriod = std::chrono::milliseconds(500);
 constexpr size_t kPoseFlushCount = 512;
+/// A map that received nothing for this long fuses its hot blocks: an idle map holds the
+/// compact form a finished benchmark build and a recovered server hold (same cell states,
+/// far fewer cuboids). Streams pause longer than this only between sessions.
+constexpr auto kIdleFuseDelay = std::chrono::seconds(1);
 /// Place recognition takes a robot's next frame of a kind once it moved or turned this much
 /// since its last one (or, without poses, this much later): nearer frames show the same place,
 /// and a lidar at 10 Hz would otherwise keep a core busy.
@@ -165,8 +169,16 @@ void MapWorker::run() {
       metrics_.apply_latency.observe(std::chrono::duration<double>(Clock::now() - start).count());
       if (item.applied) item.applied();
     }
+    if (!batch.empty()) {
+      unfused_changes_ = true;
+      last_apply_ = Clock::now();
+    }
     batch.clear();
     try {
+      if (unfused_changes_ && Clock::now() - last_apply_ >= kIdleFuseDelay) {
+        map_->fuseAll(config_.maps.insert_threads);
+        unfused_changes_ = false;
+      }
       if (!pending_poses_.empty() &&
           (pending_poses_.size() >= kPoseFlushCount || Clock::now() - last_pose_flush_ >= kPoseFlushPeriod)) {
         flushTrajectories();

@@ -186,6 +186,9 @@ class MapWorker {
   std::chrono::steady_clock::time_point last_snapshot_;
   std::vector<std::pair<std::string, store::TrajectoryPose>> pending_poses_;
   std::chrono::steady_clock::time_point last_pose_flush_;
+  /// Messages applied since the hot blocks were last fused, and when the latest was.
+  bool unfused_changes_ = false;
+  std::chrono::steady_clock::time_point last_apply_;
   std::thread thread_;
 };
 
