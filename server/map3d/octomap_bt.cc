@@ -1,20 +1,21 @@
 #include "map3d/octomap_bt.h"
 
+#include "map3d/octomap_header.h"
+
 #include <algorithm>
 #include <array>
 #include <charconv>
 #include <cmath>
 #include <cstdint>
 #include <stdexcept>
-#include <system_error>
 
 namespace rmap::map3d {
 namespace {
 
 // OctoMap compares only this prefix of the first line (AbstractOccupancyOcTree::readBinary).
 constexpr std::string_view kMagic = "# Octomap OcTree binary file";
-constexpr int kTreeDepth = 16;
-constexpr int32_t kKeyOffset = 32768;  // OctoMap key of cell index 0
+constexpr int kTreeDepth = kOctreeDepth;
+constexpr int32_t kKeyOffset = kOctreeKeyOffset;
 
 // 2-bit child codes as OctoMap's std::bitset puts them: child i of a byte
 // occupies bits 2i (set for free and inner) and 2i+1 (set for occupied and inner).
@@ -24,82 +25,12 @@ constexpr unsigned kInnerNode = 3;
 
 [[noreturn]] void fail(const std::string& what) { throw std::runtime_error("OctoMap .bt: " + what); }
 
-bool isSpace(char c) { return c == ' ' || c == '\t' || c == '\n' || c == '\r' || c == '\v' || c == '\f'; }
-
-/// Header reader mirroring AbstractOcTree::readHeader: whitespace-separated
-/// tokens, `#…` comments and unknown keywords skip the rest of their line,
-/// `data` ends the header after its line.
-class HeaderReader {
- public:
-  explicit HeaderReader(std::string_view bytes) : bytes_(bytes) {}
-
-  /// Next whitespace-delimited token, empty at the end of the input.
-  std::string_view token() {
-    while (pos_ < bytes_.size() && isSpace(bytes_[pos_])) ++pos_;
-    const size_t start = pos_;
-    while (pos_ < bytes_.size() && !isSpace(bytes_[pos_])) ++pos_;
-    return bytes_.substr(start, pos_ - start);
-  }
-
-  void skipLine() {
-    const size_t nl = bytes_.find('\n', pos_);
-    pos_ = nl == std::string_view::npos ? bytes_.size() : nl + 1;
-  }
-
-  size_t position() const { return pos_; }
-
- private:
-  std::string_view bytes_;
-  size_t pos_ = 0;
-};
-
-struct Header {
-  double resolution_m = 0.0;
-  uint64_t size = 0;
-  size_t data_offset = 0;
-};
-
-Header readHeader(std::string_view bytes) {
-  if (bytes.substr(0, kMagic.size()) != kMagic) {
-    fail("first line does not start with \"" + std::string(kMagic) + "\" (not an OcTree binary file)");
-  }
-  HeaderReader in(bytes);
-  in.skipLine();
-  std::string_view id;
-  bool have_res = false, have_size = false, have_data = false;
-  Header h;
-  while (!have_data) {
-    const std::string_view t = in.token();
-    if (t.empty()) fail("header ends before the \"data\" line");
-    if (t == "data") {
-      in.skipLine();
-      have_data = true;
-    } else if (t.front() == '#') {
-      in.skipLine();
-    } else if (t == "id") {
-      id = in.token();
-    } else if (t == "res") {
-      const std::string_view v = in.token();
-      const auto [end, ec] = std::from_chars(v.data(), v.data() + v.size(), h.resolution_m);
-      if (ec != std::errc() || end != v.data() + v.size()) fail("bad res value \"" + std::string(v) + "\"");
-      have_res = true;
-    } else if (t == "size") {
-      const std::string_view v = in.token();
-      const auto [end, ec] = std::from_chars(v.data(), v.data() + v.size(), h.size);
-      if (ec != std::errc() || end != v.data() + v.size()) fail("bad size value \"" + std::string(v) + "\"");
-      have_size = true;
-    } else {
-      in.skipLine();  // OctoMap warns about unknown keywords and skips them
-    }
-  }
+OctreeHeader readHeader(std::string_view bytes) {
+  OctreeHeader h = readOctreeHeader(bytes, kMagic, "OctoMap .bt");
   // "1" is the deprecated id OctoMap still maps to OcTree.
-  if (id != "OcTree" && id != "1") {
-    fail(id.empty() ? "header has no id" : "unsupported tree id \"" + std::string(id) + "\" (only OcTree)");
+  if (h.id != "OcTree" && h.id != "1") {
+    fail(h.id.empty() ? "header has no id" : "unsupported tree id \"" + h.id + "\" (only OcTree)");
   }
-  if (!have_res) fail("header has no res");
-  if (!(h.resolution_m > 0.0) || !std::isfinite(h.resolution_m)) fail("res must be finite and > 0");
-  if (!have_size) fail("header has no size");
-  h.data_offset = in.position();
   return h;
 }
 
@@ -210,8 +141,10 @@ uint64_t countNodes(std::string_view data) {
 
 }  // namespace
 
+bool looksLikeBt(std::string_view bytes) { return bytes.substr(0, kMagic.size()) == kMagic; }
+
 BtTree parseBt(std::string_view bytes) {
-  const Header header = readHeader(bytes);
+  const OctreeHeader header = readHeader(bytes);
   BtTree tree;
   tree.resolution_m = header.resolution_m;
   const std::string_view data = bytes.substr(header.data_offset);

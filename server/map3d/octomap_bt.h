@@ -35,6 +35,9 @@ struct BtCell {
   bool occupied;
 };
 
+/// Whether `bytes` start with the `.bt` first line.
+bool looksLikeBt(std::string_view bytes);
+
 /// Parses `.bt` bytes.
 /// @throws std::runtime_error with a message naming the problem (bad magic,
 ///         unsupported id, bad size/res, truncated data, trailing bytes, node
