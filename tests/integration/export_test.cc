@@ -12,7 +12,6 @@
 
 #include "api_helpers.h"
 #include "client/laser2d_robot.h"
-#include "client/robot_client.h"
 #include "rmap_cli.h"
 #include "rmapd_process.h"
 #include "scene_clouds.h"
@@ -21,42 +20,6 @@
 
 namespace rmap::testing {
 namespace {
-
-/// Streams messages as one robot and waits for every ack.
-void stream(const std::string& url, const std::string& robot_id, const std::string& map,
-            const std::vector<v1::RobotMessage>& messages, const v1::SensorDescription* sensor = nullptr) {
-  client::RobotClientOptions options;
-  options.server_url = url;
-  options.hello.set_robot_id(robot_id);
-  options.hello.set_map(map);
-  if (sensor) *options.hello.add_sensors() = *sensor;
-  client::RobotClient robot(options);
-  robot.connect();
-  for (const v1::RobotMessage& m : messages) robot.send(m);
-  ASSERT_TRUE(robot.waitAllAcked(std::chrono::seconds(60)));
-}
-
-/// Every cuboid of a map, straight from the box endpoint.
-std::vector<nlohmann::json> allCuboids(client::HttpClient& http, const std::string& map) {
-  const nlohmann::json info = getJson(http, "/v1/maps/" + map);
-  std::vector<nlohmann::json> out;
-  const auto corner = [&](const char* key) {
-    std::ostringstream s;
-    s.precision(17);
-    s << info["bounds"][key][0].get<double>() << "," << info["bounds"][key][1].get<double>() << ","
-      << info["bounds"][key][2].get<double>();
-    return s.str();
-  };
-  std::string token;
-  do {
-    const nlohmann::json page = getJson(http, "/v1/maps/" + map + "/occupancy/box?min=" + corner("min") +
-                                                  "&max=" + corner("max") + "&limit=100000" +
-                                                  (token.empty() ? "" : "&page_token=" + token));
-    for (const nlohmann::json& c : page["cuboids"]) out.push_back(c);
-    token = page["next_page_token"].is_string() ? page["next_page_token"].get<std::string>() : "";
-  } while (!token.empty());
-  return out;
-}
 
 /// "element <name> <count>" of a PLY header; -1 when absent.
 long plyCount(const std::string& ply, const std::string& element) {
@@ -114,7 +77,7 @@ class Export : public ::testing::Test {
     dir_ = new TempDir("rmap-export");
     rmapd_ = new RmapdProcess(dir_->path() / "data");
     const client::SimScene scene = client::makeSimScene(4);
-    stream(rmapd_->wsUrl(), "lidar", "lab", sceneClouds(scene, 6, 3));
+    streamAll(rmapd_->wsUrl(), "lidar", "lab", sceneClouds(scene, 6, 3));
     // A 2D laser robot on a map of its own: the 2D layers.
     sim::BuildingOptions building;
     building.max_furniture_per_room = 1;
@@ -123,7 +86,7 @@ class Export : public ::testing::Test {
     client::extendMarkersToLaserPlane(world, layout, building.floor_height_m, 1.0);
     sim::TrajectoryOptions path;
     path.sensor_height_m = 1.0;
-    path.num_poses = 40;
+    path.num_poses = 160;
     path.step_m = 0.26;
     client::Laser2dRobotOptions laser;
     laser.mount_height_m = 1.0;
@@ -136,7 +99,7 @@ class Export : public ::testing::Test {
       scans.push_back(std::move(m));
     }
     const v1::SensorDescription sensor = walker.sensor();
-    stream(rmapd_->wsUrl(), "walker", "floor", scans, &sensor);
+    streamAll(rmapd_->wsUrl(), "walker", "floor", scans, &sensor);
   }
   static void TearDownTestSuite() {
     delete rmapd_;
@@ -270,15 +233,42 @@ TEST_F(Export, ReflectivityPngCoversTheSameCellsAsThePgm) {
   const Pgm grid = parsePgm(fileText(pgm));
   EXPECT_EQ(image.width, grid.width);
   EXPECT_EQ(image.height, grid.height);
-  // Reflectivity is fused where beams ended: on the occupied (black) cells of the PGM, not in free space.
-  size_t on_walls = 0, in_free_space = 0;
+  // Reflectivity is fused where beams ended: mostly on the occupied (black) cells of the PGM.
+  size_t on_walls = 0, elsewhere = 0;
   for (size_t i = 0; i < grid.pixels.size(); ++i) {
-    const bool opaque = image.pixels[2 * i + 1] == 255;
-    on_walls += opaque && static_cast<uint8_t>(grid.pixels[i]) == 0;
-    in_free_space += opaque && static_cast<uint8_t>(grid.pixels[i]) == 254;
+    if (image.pixels[2 * i + 1] != 255) continue;
+    (static_cast<uint8_t>(grid.pixels[i]) == 0 ? on_walls : elsewhere) += 1;
   }
-  EXPECT_GT(on_walls, 50u);
-  EXPECT_LT(in_free_space, on_walls / 10);
+  EXPECT_GT(on_walls, 500u);
+  EXPECT_GT(on_walls, elsewhere);
+  // Pixel for pixel the native-zoom tiles (one cell per pixel): row 0 is the +y edge.
+  client::HttpClient http(rmapd_->httpUrl());
+  const nlohmann::json layers = getJson(http, "/v1/maps/floor/layers");
+  const double r = layers["resolution_m"].get<double>();
+  const int min_x = static_cast<int>(std::lround(layers["known_bounds"]["min"][0].get<double>() / r));
+  const int max_y = static_cast<int>(std::lround(layers["known_bounds"]["max"][1].get<double>() / r)) - 1;
+  std::map<std::pair<int, int>, GreyAlpha> tiles;
+  size_t compared = 0;
+  for (int row = 0; row < image.height; ++row) {
+    for (int col = 0; col < image.width; ++col) {
+      const int cx = min_x + col, cy = max_y - row;
+      const std::pair<int, int> key{(cx + 32768) >> 8, (32767 - cy) >> 8};
+      auto tile = tiles.find(key);
+      if (tile == tiles.end()) {
+        const client::HttpResponse t = http.get("/v1/maps/floor/layers/reflectivity/8/" + std::to_string(key.first) +
+                                                "/" + std::to_string(key.second) + ".png");
+        ASSERT_EQ(t.status, 200);
+        tile = tiles.emplace(key, decodePng(t.body)).first;
+      }
+      const size_t at = 2 * static_cast<size_t>(((32767 - cy) & 255) * 256 + ((cx + 32768) & 255));
+      const size_t here = 2 * static_cast<size_t>(row * image.width + col);
+      ASSERT_EQ(image.pixels[here], tile->second.pixels[at]) << "cell " << cx << "," << cy;
+      ASSERT_EQ(image.pixels[here + 1], tile->second.pixels[at + 1]) << "cell " << cx << "," << cy;
+      ++compared;
+    }
+  }
+  std::printf("[ reflectivity ] %d x %d px, %zu on walls, %zu elsewhere; %zu pixels equal the tiles'\n", image.width,
+              image.height, on_walls, elsewhere, compared);
 }
 
 TEST_F(Export, ClearErrorsAndNoFileForBadRequests) {
