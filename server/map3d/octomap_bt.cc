@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <charconv>
 #include <cmath>
 #include <cstdint>
@@ -96,20 +97,30 @@ uint64_t mortonCode(const CellKey& c) {
          (spreadBits3(static_cast<uint64_t>(c.z + kKeyOffset)) << 2);
 }
 
-/// Entries are (Morton code << 1) | occupied, sorted and unique by code.
+/// An entry: (Morton code of the cube's lowest cell << 6) | (log2 of its edge << 1) | occupied.
+constexpr int kEntryCodeShift = 6;
+uint64_t cubeEntry(const CellKey& min_cell, int log2_size, bool occupied) {
+  return (mortonCode(min_cell) << kEntryCodeShift) | (static_cast<uint64_t>(log2_size) << 1) | (occupied ? 1u : 0u);
+}
+int entryLog2Size(uint64_t e) { return static_cast<int>((e >> 1) & 31u); }
+
+/// Writes entries sorted by code, of disjoint aligned cubes of edge at most 2^15 cells.
 class NodeWriter {
  public:
   explicit NodeWriter(std::string& out) : out_(out) {}
 
   /// Writes the subtree of the node at `depth` holding the entries [begin, end)
-  /// (non-empty) and returns its code in the parent. A node whose 8 children
-  /// are leaves of one state is pruned: its bytes are taken back and it
-  /// becomes a leaf. The root (depth 0) is always written.
+  /// (non-empty) and returns its code in the parent. A cube as large as the
+  /// node is the node, a leaf. A node whose 8 children are leaves of one state
+  /// is pruned: its bytes are taken back and it becomes a leaf. The root
+  /// (depth 0) is always written.
   unsigned write(const uint64_t* begin, const uint64_t* end, int depth) {
-    if (depth == kTreeDepth) return (*begin & 1u) ? kOccupiedLeaf : kFreeLeaf;
+    if (end - begin == 1 && entryLog2Size(*begin) == kTreeDepth - depth) {
+      return (*begin & 1u) ? kOccupiedLeaf : kFreeLeaf;
+    }
     const size_t at = out_.size();
     out_.append(2, '\0');
-    const int shift = 1 + 3 * (kTreeDepth - 1 - depth);
+    const int shift = kEntryCodeShift + 3 * (kTreeDepth - 1 - depth);
     unsigned codes = 0;
     const uint64_t* first = begin;
     for (unsigned i = 0; i < 8 && first != end; ++i) {
@@ -165,32 +176,17 @@ BtTree parseBt(std::string_view bytes) {
   return tree;
 }
 
-std::string writeBt(double resolution_m, std::vector<BtCell> cells) {
-  if (!(resolution_m > 0.0) || !std::isfinite(resolution_m)) {
-    throw std::invalid_argument("writeBt: resolution must be finite and > 0, got " + std::to_string(resolution_m));
-  }
-  std::vector<uint64_t> entries;
-  entries.reserve(cells.size());
-  for (const BtCell& c : cells) {
-    if (!cellInRange(c.cell)) {
-      throw std::invalid_argument("writeBt: cell (" + std::to_string(c.cell.x) + ", " + std::to_string(c.cell.y) +
-                                  ", " + std::to_string(c.cell.z) + ") is outside [-32768, 32768)");
-    }
-    entries.push_back((mortonCode(c.cell) << 1) | (c.occupied ? 1u : 0u));
-  }
-  cells = {};  // release the input before sorting
-  // Stable by code so that among duplicates the last input stays last and wins.
-  std::stable_sort(entries.begin(), entries.end(), [](uint64_t a, uint64_t b) { return (a >> 1) < (b >> 1); });
-  size_t n = 0;
-  for (size_t i = 0; i < entries.size(); ++i) {
-    if (n > 0 && (entries[n - 1] >> 1) == (entries[i] >> 1)) {
-      entries[n - 1] = entries[i];
-    } else {
-      entries[n++] = entries[i];
-    }
-  }
-  entries.resize(n);
+namespace {
 
+void checkResolution(double resolution_m, const char* who) {
+  if (!(resolution_m > 0.0) || !std::isfinite(resolution_m)) {
+    throw std::invalid_argument(std::string(who) + ": resolution must be finite and > 0, got " +
+                                std::to_string(resolution_m));
+  }
+}
+
+/// The file around the tree of `entries` (sorted by code, cubes disjoint).
+std::string writeEntries(double resolution_m, const std::vector<uint64_t>& entries) {
   std::string data;
   if (!entries.empty()) NodeWriter(data).write(entries.data(), entries.data() + entries.size(), 0);
 
@@ -206,6 +202,55 @@ std::string writeBt(double resolution_m, std::vector<BtCell> cells) {
   out += "\ndata\n";
   out += data;
   return out;
+}
+
+}  // namespace
+
+std::string writeBt(double resolution_m, std::vector<BtCell> cells) {
+  checkResolution(resolution_m, "writeBt");
+  std::vector<uint64_t> entries;
+  entries.reserve(cells.size());
+  for (const BtCell& c : cells) {
+    if (!cellInRange(c.cell)) {
+      throw std::invalid_argument("writeBt: cell (" + std::to_string(c.cell.x) + ", " + std::to_string(c.cell.y) +
+                                  ", " + std::to_string(c.cell.z) + ") is outside [-32768, 32768)");
+    }
+    entries.push_back(cubeEntry(c.cell, 0, c.occupied));
+  }
+  cells = {};  // release the input before sorting
+  // Stable by code so that among duplicates the last input stays last and wins.
+  const auto byCode = [](uint64_t a, uint64_t b) { return (a >> kEntryCodeShift) < (b >> kEntryCodeShift); };
+  std::stable_sort(entries.begin(), entries.end(), byCode);
+  size_t n = 0;
+  for (size_t i = 0; i < entries.size(); ++i) {
+    if (n > 0 && !byCode(entries[n - 1], entries[i])) {
+      entries[n - 1] = entries[i];
+    } else {
+      entries[n++] = entries[i];
+    }
+  }
+  entries.resize(n);
+  return writeEntries(resolution_m, entries);
+}
+
+std::string writeBtCubes(double resolution_m, const std::vector<BtLeaf>& cubes) {
+  checkResolution(resolution_m, "writeBtCubes");
+  std::vector<uint64_t> entries;
+  entries.reserve(cubes.size());
+  for (const BtLeaf& c : cubes) {
+    const int32_t s = c.size_cells;
+    const CellKey last{c.min_cell.x + s - 1, c.min_cell.y + s - 1, c.min_cell.z + s - 1};
+    const auto aligned = [&](int32_t cell) { return (cell + kKeyOffset) % s == 0; };
+    if (s < 1 || s > kKeyOffset || !std::has_single_bit(static_cast<uint32_t>(s)) || !cellInRange(c.min_cell) ||
+        !cellInRange(last) || !aligned(c.min_cell.x) || !aligned(c.min_cell.y) || !aligned(c.min_cell.z)) {
+      throw std::invalid_argument("writeBtCubes: the cube at (" + std::to_string(c.min_cell.x) + ", " +
+                                  std::to_string(c.min_cell.y) + ", " + std::to_string(c.min_cell.z) + ") of edge " +
+                                  std::to_string(s) + " is not an aligned power of two of at most 32768 cells");
+    }
+    entries.push_back(cubeEntry(c.min_cell, std::countr_zero(static_cast<uint32_t>(s)), c.occupied));
+  }
+  std::sort(entries.begin(), entries.end());
+  return writeEntries(resolution_m, entries);
 }
 
 }  // namespace rmap::map3d

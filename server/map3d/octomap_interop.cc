@@ -23,11 +23,43 @@ std::unique_ptr<CuboidMap> mapFromBt(const BtTree& tree, const OccupancyParams& 
   return map;
 }
 
+namespace {
+
+/// Appends the cubes of the octree under the cube at `origin` (edge `size`, aligned) that lie
+/// inside `box`, each as large as it can be.
+void appendCubes(const CuboidBox& box, const CellKey& origin, int32_t size, bool occupied, std::vector<BtLeaf>& out) {
+  bool inside = true;
+  for (int a = 0; a < 3; ++a) {
+    if (origin[a] > box.max[a] || origin[a] + size - 1 < box.min[a]) return;
+    inside = inside && origin[a] >= box.min[a] && origin[a] + size - 1 <= box.max[a];
+  }
+  if (inside) {
+    out.push_back({origin, size, occupied});
+    return;
+  }
+  const int32_t half = size / 2;
+  for (int i = 0; i < 8; ++i) {
+    appendCubes(box, {origin.x + ((i & 1) ? half : 0), origin.y + ((i & 2) ? half : 0), origin.z + ((i & 4) ? half : 0)},
+                half, occupied, out);
+  }
+}
+
+}  // namespace
+
 std::string mapToBt(const CuboidMap& map) {
-  std::vector<BtCell> cells;
+  // Cuboids cut into octants, not cells: memory follows the tree's leaves, not the known volume.
+  std::vector<BtLeaf> cubes;
   const float threshold = map.occupancyParams().occupied_threshold_log_odds;
-  map.forEachKnownCell([&](const CellKey& c, float log_odds) { cells.push_back({c, log_odds >= threshold}); });
-  return writeBt(map.resolution(), std::move(cells));
+  map.forEachBlock([&](const BlockView& view) {
+    const CellKey origin{view.key.x << kBlockShift, view.key.y << kBlockShift, view.key.z << kBlockShift};
+    for (const PackedCuboid& c : view.cuboids) {
+      const CuboidBox box{{origin.x + c.lo(0), origin.y + c.lo(1), origin.z + c.lo(2)},
+                          {origin.x + c.hi(0), origin.y + c.hi(1), origin.z + c.hi(2)},
+                          c.log_odds};
+      appendCubes(box, origin, kBlockEdge, c.log_odds >= threshold, cubes);
+    }
+  });
+  return writeBtCubes(map.resolution(), cubes);
 }
 
 std::vector<OctreeLeaf> leavesOf(const BtTree& tree, const OccupancyParams& occupancy) {

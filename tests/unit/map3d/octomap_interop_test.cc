@@ -80,6 +80,22 @@ TEST(OctomapInterop, ExportIsReadBackByOctomapWithTheSameCells) {
   });
 }
 
+TEST(OctomapInterop, ExportFromCuboidsEqualsTheCellByCellTree) {
+  CuboidMap map(0.1);
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> u(-4.0f, 4.0f);
+  for (int s = 0; s < 4; ++s) {
+    std::vector<Eigen::Vector3f> points;
+    for (int i = 0; i < 4000; ++i) points.push_back({u(rng), u(rng), u(rng) * 0.4f});
+    map.insertScan({0.3f * s, -0.2f, 0.1f}, points);
+  }
+  std::vector<BtCell> cells;
+  map.forEachKnownCell([&](const CellKey& c, float v) { cells.push_back({c, v >= 0.0f}); });
+  // The same pruned tree, byte for byte, whether written from cells or from the cuboids' octants.
+  EXPECT_EQ(mapToBt(map), writeBt(map.resolution(), cells));
+  EXPECT_EQ(mapToBt(CuboidMap(0.1)), writeBt(0.1, {}));
+}
+
 /// The map built from blocksFromLeaves, as an import builds it.
 std::unique_ptr<CuboidMap> mapFromBlocks(double resolution_m, MapBlocks blocks) {
   auto map = std::make_unique<CuboidMap>(resolution_m);
