@@ -24,10 +24,12 @@ constexpr unsigned kFreeLeaf = 1;
 constexpr unsigned kOccupiedLeaf = 2;
 constexpr unsigned kInnerNode = 3;
 
-[[noreturn]] void fail(const std::string& what) { throw std::runtime_error("OctoMap .bt: " + what); }
+const std::string kFormat = "OctoMap .bt";
+
+[[noreturn]] void fail(const std::string& what) { throw std::runtime_error(kFormat + ": " + what); }
 
 OctreeHeader readHeader(std::string_view bytes) {
-  OctreeHeader h = readOctreeHeader(bytes, kMagic, "OctoMap .bt");
+  OctreeHeader h = readOctreeHeader(bytes, kMagic, kFormat);
   // "1" is the deprecated id OctoMap still maps to OcTree.
   if (h.id != "OcTree" && h.id != "1") {
     fail(h.id.empty() ? "header has no id" : "unsupported tree id \"" + h.id + "\" (only OcTree)");
@@ -159,20 +161,10 @@ BtTree parseBt(std::string_view bytes) {
   BtTree tree;
   tree.resolution_m = header.resolution_m;
   const std::string_view data = bytes.substr(header.data_offset);
-  if (header.size == 0) {
-    // OctoMap writes an empty tree as "size 0" and no data at all.
-    if (!data.empty()) fail(std::to_string(data.size()) + " bytes of data after a header with size 0");
-    return tree;
-  }
+  if (isEmptyTree(header, data, kFormat)) return tree;
   NodeReader reader(data, tree.leaves);
   reader.readInner(0, {0, 0, 0});
-  if (reader.position() != data.size()) {
-    fail(std::to_string(data.size() - reader.position()) + " trailing bytes after the tree");
-  }
-  if (reader.nodes() != header.size) {
-    fail("tree has " + std::to_string(reader.nodes()) + " nodes but the header says size " +
-         std::to_string(header.size));
-  }
+  checkTreeEnd(header, data, reader.position(), reader.nodes(), kFormat);
   return tree;
 }
 

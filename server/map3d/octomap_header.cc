@@ -82,4 +82,23 @@ OctreeHeader readOctreeHeader(std::string_view bytes, std::string_view magic, co
   return h;
 }
 
+bool isEmptyTree(const OctreeHeader& header, std::string_view data, const std::string& format) {
+  if (header.size != 0) return false;
+  if (!data.empty()) {
+    throw std::runtime_error(format + ": " + std::to_string(data.size()) + " bytes of data after a header with size 0");
+  }
+  return true;
+}
+
+void checkTreeEnd(const OctreeHeader& header, std::string_view data, size_t bytes_read, uint64_t nodes_read,
+                  const std::string& format) {
+  if (bytes_read != data.size()) {
+    throw std::runtime_error(format + ": " + std::to_string(data.size() - bytes_read) + " trailing bytes after the tree");
+  }
+  if (nodes_read != header.size) {
+    throw std::runtime_error(format + ": tree has " + std::to_string(nodes_read) + " nodes but the header says size " +
+                             std::to_string(header.size));
+  }
+}
+
 }  // namespace rmap::map3d

@@ -30,4 +30,13 @@ struct OctreeHeader {
 ///         no data line, bad or missing size or res)
 OctreeHeader readOctreeHeader(std::string_view bytes, std::string_view magic, const std::string& format);
 
+/// Whether the header announces an empty tree, which OctoMap writes as `size 0` and no data.
+/// @throws std::runtime_error "<format>: …" when data follows such a header
+bool isEmptyTree(const OctreeHeader& header, std::string_view data, const std::string& format);
+
+/// Checks that the tree read from the data ended with it and has the header's node count.
+/// @throws std::runtime_error "<format>: …" for trailing bytes or another node count
+void checkTreeEnd(const OctreeHeader& header, std::string_view data, size_t bytes_read, uint64_t nodes_read,
+                  const std::string& format);
+
 }  // namespace rmap::map3d

@@ -14,7 +14,9 @@ namespace {
 // OctoMap compares only this prefix of the first line (AbstractOcTree::readHeader).
 constexpr std::string_view kMagic = "# Octomap OcTree file";
 
-[[noreturn]] void fail(const std::string& what) { throw std::runtime_error("OctoMap .ot: " + what); }
+const std::string kFormat = "OctoMap .ot";
+
+[[noreturn]] void fail(const std::string& what) { throw std::runtime_error(kFormat + ": " + what); }
 
 /// Bytes of a node's data after its float log-odds, per tree type.
 size_t extraNodeBytes(const std::string& id) {
@@ -71,26 +73,16 @@ class NodeReader {
 bool looksLikeOt(std::string_view bytes) { return bytes.substr(0, kMagic.size()) == kMagic; }
 
 OtTree parseOt(std::string_view bytes) {
-  const OctreeHeader header = readOctreeHeader(bytes, kMagic, "OctoMap .ot");
+  const OctreeHeader header = readOctreeHeader(bytes, kMagic, kFormat);
   OtTree tree;
   tree.id = header.id;
   tree.resolution_m = header.resolution_m;
   const size_t extra = extraNodeBytes(header.id);
   const std::string_view data = bytes.substr(header.data_offset);
-  if (header.size == 0) {
-    // An empty tree is written as "size 0" and no data.
-    if (!data.empty()) fail(std::to_string(data.size()) + " bytes of data after a header with size 0");
-    return tree;
-  }
+  if (isEmptyTree(header, data, kFormat)) return tree;
   NodeReader reader(data, extra, tree.leaves);
   reader.readNode(0, {0, 0, 0});
-  if (reader.position() != data.size()) {
-    fail(std::to_string(data.size() - reader.position()) + " trailing bytes after the tree");
-  }
-  if (reader.nodes() != header.size) {
-    fail("tree has " + std::to_string(reader.nodes()) + " nodes but the header says size " +
-         std::to_string(header.size));
-  }
+  checkTreeEnd(header, data, reader.position(), reader.nodes(), kFormat);
   return tree;
 }
 

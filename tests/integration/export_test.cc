@@ -4,13 +4,13 @@
 // the map_server PGM + YAML by a parser, the reflectivity PNG by libpng.
 #include <gtest/gtest.h>
 #include <octomap/OcTree.h>
-#include <png.h>
 
 #include <map>
 #include <random>
 #include <sstream>
 
 #include "api_helpers.h"
+#include "image_files.h"
 #include "client/laser2d_robot.h"
 #include "rmap_cli.h"
 #include "rmapd_process.h"
@@ -28,22 +28,6 @@ long plyCount(const std::string& ply, const std::string& element) {
   return at == std::string::npos ? -1 : std::stol(ply.substr(at + key.size()));
 }
 
-struct GreyAlpha {
-  int width = 0, height = 0;
-  std::vector<uint8_t> pixels;
-};
-
-GreyAlpha decodePng(const std::string& png) {
-  png_image image{};
-  image.version = PNG_IMAGE_VERSION;
-  if (!png_image_begin_read_from_memory(&image, png.data(), png.size())) throw std::runtime_error("not a PNG");
-  image.format = PNG_FORMAT_GA;
-  GreyAlpha out{static_cast<int>(image.width), static_cast<int>(image.height),
-                std::vector<uint8_t>(PNG_IMAGE_SIZE(image))};
-  if (!png_image_finish_read(&image, nullptr, out.pixels.data(), 0, nullptr)) throw std::runtime_error("bad PNG");
-  return out;
-}
-
 /// A binary PGM: size, maxval and pixels.
 struct Pgm {
   int width = 0, height = 0, maxval = 0;
@@ -59,16 +43,6 @@ Pgm parsePgm(const std::string& bytes) {
   if (magic != "P5" || !in) throw std::runtime_error("not a binary PGM");
   pgm.pixels = bytes.substr(static_cast<size_t>(in.tellg()));
   return pgm;
-}
-
-std::map<std::string, std::string> parseYaml(const std::string& text) {
-  std::map<std::string, std::string> out;
-  std::istringstream in(text);
-  for (std::string line; std::getline(in, line);) {
-    const size_t colon = line.find(": ");
-    if (colon != std::string::npos) out[line.substr(0, colon)] = line.substr(colon + 2);
-  }
-  return out;
 }
 
 class Export : public ::testing::Test {
@@ -247,23 +221,14 @@ TEST_F(Export, ReflectivityPngCoversTheSameCellsAsThePgm) {
   const double r = layers["resolution_m"].get<double>();
   const int min_x = static_cast<int>(std::lround(layers["known_bounds"]["min"][0].get<double>() / r));
   const int max_y = static_cast<int>(std::lround(layers["known_bounds"]["max"][1].get<double>() / r)) - 1;
-  std::map<std::pair<int, int>, GreyAlpha> tiles;
+  LayerCells tiles(http, "floor", "reflectivity");
   size_t compared = 0;
   for (int row = 0; row < image.height; ++row) {
     for (int col = 0; col < image.width; ++col) {
-      const int cx = min_x + col, cy = max_y - row;
-      const std::pair<int, int> key{(cx + 32768) >> 8, (32767 - cy) >> 8};
-      auto tile = tiles.find(key);
-      if (tile == tiles.end()) {
-        const client::HttpResponse t = http.get("/v1/maps/floor/layers/reflectivity/8/" + std::to_string(key.first) +
-                                                "/" + std::to_string(key.second) + ".png");
-        ASSERT_EQ(t.status, 200);
-        tile = tiles.emplace(key, decodePng(t.body)).first;
-      }
-      const size_t at = 2 * static_cast<size_t>(((32767 - cy) & 255) * 256 + ((cx + 32768) & 255));
       const size_t here = 2 * static_cast<size_t>(row * image.width + col);
-      ASSERT_EQ(image.pixels[here], tile->second.pixels[at]) << "cell " << cx << "," << cy;
-      ASSERT_EQ(image.pixels[here + 1], tile->second.pixels[at + 1]) << "cell " << cx << "," << cy;
+      const auto [grey, alpha] = tiles.at(min_x + col, max_y - row);
+      ASSERT_EQ(image.pixels[here], grey) << "pixel " << col << "," << row;
+      ASSERT_EQ(image.pixels[here + 1], alpha) << "pixel " << col << "," << row;
       ++compared;
     }
   }
