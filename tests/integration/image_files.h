@@ -61,5 +61,12 @@ class LayerCells {
     }
     const size_t i = 2 * static_cast<size_t>(((32767 - cy) & 255) * 256 + ((cx + 32768) & 255));
     return {it->second.pixels[i], it->second.pixels[i + 1]};
+  }
+
+ private:
+  client::HttpClient& http_;
+  std::string prefix_;
+  std::map<std::pair<int, int>, GreyAlpha> tiles_;
+};
 
 }  // namespace rmap::testing

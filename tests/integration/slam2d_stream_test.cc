@@ -23,14 +23,6 @@ namespace {
 
 constexpr double kLaserHeight_m = 1.0;
 
-  }
-
- private:
-  client::HttpClient& http_;
-  std::string prefix_;
-  std::map<std::pair<int, int>, GreyAlpha> tiles_;
-};
-
 TEST(Slam2dStream, ScansGetPoseEstimatesAndMakeTheTwoDimensionalLayers) {
   TempDir dir("rmap-slam2d");
   auto rmapd = std::make_unique<RmapdProcess>(dir.path() / "data");
