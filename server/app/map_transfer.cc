@@ -93,7 +93,7 @@ net::Response HttpApi::importMap(const net::Request& request, const Target& targ
     if (!worker->importBlocks(blocks, replace)) {
       throw ApiError(409, "map_not_empty",
                      "map '" + name + "' already holds " + std::to_string(worker->map().stats().known_cells) +
-                         " known cells; pass replace=true to replace its 3D content");
+                         " known cells; replace its 3D content with replace=true (rmap import --replace)");
     }
   } catch (const store::StoreError& e) {
     throw ApiError(503, "unavailable", std::string("the import could not be stored: ") + e.what());
