@@ -47,15 +47,20 @@ TEST(OctomapInterop, ImportsGeb079AsOctomapReadsIt) {
   EXPECT_LT(map->stats().cuboids, tree.getNumLeafNodes());
 }
 
-TEST(OctomapInterop, ExportIsReadBackByOctomapWithTheSameCells) {
-  CuboidMap map(0.05);
-  std::mt19937 rng(5);
-  std::uniform_real_distribution<float> u(-3.0f, 3.0f);
-  for (int s = 0; s < 3; ++s) {
+/// Scans of random points in a flat box of half-width `half_m` (z a tenth of it), sensors along x.
+void insertRandomScans(CuboidMap& map, uint32_t seed, int scans, float half_m) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> u(-half_m, half_m);
+  for (int s = 0; s < scans; ++s) {
     std::vector<Eigen::Vector3f> points;
-    for (int i = 0; i < 3000; ++i) points.push_back({u(rng), u(rng), u(rng) * 0.3f});
+    for (int i = 0; i < 1000 * scans; ++i) points.push_back({u(rng), u(rng), u(rng) * 0.1f * half_m});
     map.insertScan({0.2f * s, 0.0f, 0.1f}, points);
   }
+}
+
+TEST(OctomapInterop, ExportIsReadBackByOctomapWithTheSameCells) {
+  CuboidMap map(0.05);
+  insertRandomScans(map, 5, 3, 3.0f);
   std::istringstream in(mapToBt(map));
   octomap::OcTree tree(0.1);
   ASSERT_TRUE(tree.readBinary(in));
@@ -82,13 +87,7 @@ TEST(OctomapInterop, ExportIsReadBackByOctomapWithTheSameCells) {
 
 TEST(OctomapInterop, ExportFromCuboidsEqualsTheCellByCellTree) {
   CuboidMap map(0.1);
-  std::mt19937 rng(11);
-  std::uniform_real_distribution<float> u(-4.0f, 4.0f);
-  for (int s = 0; s < 4; ++s) {
-    std::vector<Eigen::Vector3f> points;
-    for (int i = 0; i < 4000; ++i) points.push_back({u(rng), u(rng), u(rng) * 0.4f});
-    map.insertScan({0.3f * s, -0.2f, 0.1f}, points);
-  }
+  insertRandomScans(map, 11, 4, 4.0f);
   std::vector<BtCell> cells;
   map.forEachKnownCell([&](const CellKey& c, float v) { cells.push_back({c, v >= 0.0f}); });
   // The same pruned tree, byte for byte, whether written from cells or from the cuboids' octants.
