@@ -114,6 +114,9 @@ TEST_F(Query, BadInputExitsWithAMessage) {
   run = query("--batch '" + file.string() + "'");
   EXPECT_EQ(run.exit_code, 1);
   EXPECT_NE(run.err.find("bad.txt:2:"), std::string::npos) << run.err;
+  run = runRmap("query --server " + rmapd_->httpUrl() + " --map 'a/b' --point 0,0,0", scratch_.path());
+  EXPECT_EQ(run.exit_code, 2);
+  EXPECT_NE(run.err.find("map names are"), std::string::npos) << run.err;
   run = runRmap("query --server " + rmapd_->httpUrl() + " --map nope --point 0,0,0", scratch_.path());
   EXPECT_EQ(run.exit_code, 1);
   EXPECT_NE(run.err.find("map_not_found"), std::string::npos) << run.err;

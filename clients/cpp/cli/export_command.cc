@@ -93,7 +93,7 @@ void addExportCommand(CLI::App& app, int& exit_code) {
   o->server.addTo(*command);
   command->add_option("--format", o->format,
                       "bt: the 3D map as an OctoMap binary tree; ply: its cuboids; pgm: the 2D occupancy layer for "
-                      "ROS map_server (FILE and FILE.yaml); reflectivity: the 2D reflectivity layer as a PNG")
+                      "ROS map_server (FILE, and its .yaml beside it); reflectivity: the 2D reflectivity layer as a PNG")
       ->required()
       ->check(CLI::IsMember({"bt", "ply", "pgm", "reflectivity"}));
   command->add_option("--output", o->output, "FILE to write")->required();

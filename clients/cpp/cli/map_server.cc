@@ -2,6 +2,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
+#include <cctype>
 #include <fstream>
 #include <iostream>
 #include <sstream>
@@ -10,7 +12,17 @@ namespace rmap::cli {
 
 void MapServerOptions::addTo(CLI::App& command) {
   command.add_option("--server", server_url, "rmapd's HTTP address, http://HOST:PORT")->required();
-  command.add_option("--map", map, "map name")->required();
+  command.add_option("--map", map, "map name: 1..64 characters of [A-Za-z0-9._-]")
+      ->required()
+      ->check(CLI::Validator(
+          [](const std::string& name) {
+            const bool ok = !name.empty() && name.size() <= 64 &&
+                            std::all_of(name.begin(), name.end(), [](unsigned char c) {
+                              return std::isalnum(c) || c == '.' || c == '_' || c == '-';
+                            });
+            return ok ? std::string() : "map names are 1..64 characters of [A-Za-z0-9._-]";
+          },
+          "NAME"));
   command.add_option("--token", token, "bearer token (none in rmapd's loopback-only mode)")->envname("RMAP_TOKEN");
   command.add_option("--timeout-s", timeout_s, "seconds to wait for each answer of the server")
       ->check(CLI::PositiveNumber)
