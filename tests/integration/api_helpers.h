@@ -38,6 +38,15 @@ inline v1::OccupancyBatchResponse batchQuery(client::HttpClient& http, const std
   return response;
 }
 
+/// Config lines giving rmapd one token per role: robot-token-1 (robot bot-1), viewer-token-1, admin-token-1.
+inline constexpr const char* kRoleTokensYaml = R"(
+auth:
+  tokens:
+    - {token: robot-token-1, role: robot, robot_id: bot-1}
+    - {token: viewer-token-1, role: viewer}
+    - {token: admin-token-1, role: admin}
+)";
+
 /// Value of an unlabelled metric in Prometheus text, -1 when absent.
 inline double metricValue(const std::string& text, const std::string& name) {
   const std::string key = "\n" + name + " ";

@@ -173,16 +173,8 @@ TEST_F(Import, MalformedAndTooLargeFilesAreRefusedChangingNothing) {
 }
 
 TEST_F(Import, OnlyAdminsImportAndTheBodyLimitHolds) {
-  RmapdProcess rmapd(dir_.path() / "data", R"(
-auth:
-  tokens:
-    - {token: robot-token-1, role: robot, robot_id: bot-1}
-    - {token: viewer-token-1, role: viewer}
-    - {token: admin-token-1, role: admin}
-limits:
-  max_body_bytes: 16384
-  max_batch_points: 500
-)");
+  RmapdProcess rmapd(dir_.path() / "data",
+                     std::string(kRoleTokensYaml) + "limits:\n  max_body_bytes: 16384\n  max_batch_points: 500\n");
   octomap::OcTree tree(0.1);
   fillTree(tree, 6);
   const std::filesystem::path small = dir_.path() / "small.bt", large = dir_.path() / "large.bt";
