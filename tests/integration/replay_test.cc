@@ -19,6 +19,7 @@
 
 #include "api_helpers.h"
 #include "client/http_client.h"
+#include "rmap_cli.h"
 #include "rmapd_process.h"
 
 namespace rmap::testing {
@@ -27,25 +28,8 @@ namespace {
 namespace fs = std::filesystem;
 
 #ifdef RMAP_CLI_PATH
-struct CliRun {
-  int exit_code = -1;
-  std::string out, err;
-};
-
-std::string readText(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
 /// Runs `rmap replay ARGS` and captures its exit code and output.
-CliRun replay(const fs::path& dir, const std::string& args) {
-  const fs::path out = dir / "cli.out", err = dir / "cli.err";
-  const std::string command = std::string(RMAP_CLI_PATH) + " replay " + args + " >" + out.string() + " 2>" + err.string();
-  const int status = std::system(command.c_str());
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, readText(out), readText(err)};
-}
+CliRun replay(const fs::path& dir, const std::string& args) { return runRmap("replay " + args, dir); }
 
 /// The scene: a wall at x = 3.05 m (y −1…1 m, z 0…1 m, 5 cm apart) seen by two sensor poses.
 std::vector<Eigen::Vector3d> wallPoints() {
@@ -184,7 +168,7 @@ class ReplayTest : public ::testing::Test {
     return "--server " + rmapd_->wsUrl() + " --map " + map + " --resolution 0.1 --json " +
            (dir_->path() / "summary.json").string();
   }
-  nlohmann::json summary() const { return nlohmann::json::parse(readText(dir_->path() / "summary.json")); }
+  nlohmann::json summary() const { return nlohmann::json::parse(fileText(dir_->path() / "summary.json")); }
 
   /// Replays and expects success with `frames` acknowledged messages.
   void expectReplayed(const std::string& command, size_t frames) {
@@ -391,7 +375,7 @@ int replayCheck(const fs::path& dir, const std::string& args, std::string& out) 
   const fs::path file = dir / "check.out";
   const std::string command = std::string(RMAP_BENCH_PATH) + " replay-check " + args + " >" + file.string() + " 2>&1";
   const int status = std::system(command.c_str());
-  out = readText(file);
+  out = fileText(file);
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 

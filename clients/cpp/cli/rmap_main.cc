@@ -18,6 +18,9 @@ int main(int argc, char** argv) {
   int exit_code = 0;
   // One line per subcommand (commands.h).
   rmap::cli::addReplayCommand(app, exit_code);
+  rmap::cli::addQueryCommand(app, exit_code);
+  rmap::cli::addExportCommand(app, exit_code);
+  rmap::cli::addImportCommand(app, exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& error) {
