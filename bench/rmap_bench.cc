@@ -6,6 +6,7 @@
 #include "loop/loop_bench.h"
 #include "loop_sim/loop_sim_bench.h"
 #include "map3d/map3d_bench.h"
+#include "replay/replay_check.h"
 #include "server/server_bench.h"
 #include "slam2d/slam2d_bench.h"
 #include "slam2d/calibration_eval.h"
@@ -99,6 +100,21 @@ int main(int argc, char** argv) {
   d->add_option("--loop-min-score", slam2d.slam.loop_closure.min_score, "correlative score a loop closure needs");
   d->add_option("--loop-ambiguity-margin", slam2d.slam.loop_closure.submap.ambiguity_margin,
                 "a loop match is ambiguous when a pose away from it scores within this margin (0: no check)");
+  rmap::bench::ReplayCheckOptions replay;
+  replay.shared_data_dir = RMAP_SHARED_DATA_DIR;
+  CLI::App* r = app.add_subcommand("replay-check",
+                                   "a server's map after `rmap replay` against the map3d / slam2d offline builds");
+  r->add_option("--server", replay.server_url, "http://HOST:PORT")->required();
+  r->add_option("--token", replay.token, "bearer token (viewer role is enough)");
+  r->add_option("--map", replay.map, "the replayed map")->required();
+  r->add_option("--scans", replay.scans_source, "the 3D source replayed (as map3d --scans)");
+  r->add_option("--resolution", replay.resolution_m, "the 3D map's resolution, metres")->check(CLI::PositiveNumber);
+  r->add_option("--grid-step", replay.grid_step_cells, "query every N-th cell centre of the bounds")
+      ->check(CLI::Range(1, 1000));
+  r->add_option("--log", replay.log_path, "the CARMEN log replayed (as slam2d --log)");
+  r->add_option("--robot", replay.robot_id, "the replayed robot (for its trajectory)");
+  r->add_option("--json", replay.json_out, "write results as JSON to this file");
+
   rmap::bench::CalibrationEvalOptions calib;
   calib.lidar_pair_dir = std::string(RMAP_SHARED_DATA_DIR) + "/lidar-intensity/small-gicp-pair";
   CLI::App* c = app.add_subcommand("calib", "2D laser intensity calibration on both simulated scanners, real lidar check");
@@ -178,6 +194,11 @@ int main(int argc, char** argv) {
       return rmap::bench::runSlam2dBench(slam2d);
     }
     if (c->parsed()) return rmap::bench::runCalibrationBench(calib);
+    if (r->parsed()) {
+      if (replay.scans_source.empty() == replay.log_path.empty()) throw std::runtime_error("replay-check needs --scans or --log");
+      if (!replay.log_path.empty() && replay.robot_id.empty()) throw std::runtime_error("replay-check --log needs --robot");
+      return rmap::bench::runReplayCheck(replay);
+    }
     if (l->parsed()) return rmap::bench::runLoopBench(loop);
     if (ls->parsed()) return rmap::bench::runLoopSimBench(loop_sim);
     if (lc->parsed()) return rmap::bench::runLoopCompareBench(compare);

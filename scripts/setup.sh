@@ -16,6 +16,8 @@ packages=(
   libopencv-dev libceres-dev  # loop closure: binary features and images, the pose graph
   chromium  # the browser tests of the viewer (tests/browser)
   jq        # bench/*_matrix.sh collect the benchmarks' JSON into tables
+  python3-protobuf python3-websockets  # the Python client (clients/python) and its tests
+  python3-yaml  # tests/docker checks docker/compose.yaml
 )
 # Node.js and npm fetch and test the viewer. Debian's packages only when there is no npm:
 # over a NodeSource nodejs (which ships its own npm) they would conflict.

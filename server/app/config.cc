@@ -59,6 +59,7 @@ void readLimits(const YAML::Node& node, LimitsConfig& limits) {
   read(node, "max_messages_per_s_per_robot", limits.max_messages_per_s_per_robot);
   read(node, "viewer_send_queue_bytes", limits.viewer_send_queue_bytes);
   read(node, "max_box_cuboids", limits.max_box_cuboids);
+  read(node, "max_import_blocks", limits.max_import_blocks);
 }
 
 void readMaps(const YAML::Node& node, MapDefaults& maps) {
@@ -165,7 +166,8 @@ void validate(const Config& config) {
                                     {"max_batch_points", l.max_batch_points},
                                     {"max_in_flight_per_robot", l.max_in_flight_per_robot},
                                     {"viewer_send_queue_bytes", l.viewer_send_queue_bytes},
-                                    {"max_box_cuboids", l.max_box_cuboids}}) {
+                                    {"max_box_cuboids", l.max_box_cuboids},
+                                    {"max_import_blocks", l.max_import_blocks}}) {
     if (value < 1) throw std::invalid_argument(std::string("limits.") + name + " must be >= 1");
   }
   if (!(config.limits.max_messages_per_s_per_robot > 0.0)) {

@@ -39,6 +39,9 @@ struct LimitsConfig {
   double max_messages_per_s_per_robot = 2000;  ///< beyond: Error "rate_limited", message refused
   size_t viewer_send_queue_bytes = 4u << 20; ///< a viewer further behind is skipped
   size_t max_box_cuboids = 100'000;          ///< page size bound of occupancy/box
+  /// Blocks of 16³ cells an imported OctoMap may fill (about 150 bytes each once imported);
+  /// the file itself is bounded by max_body_bytes
+  size_t max_import_blocks = 1'000'000;
 };
 
 struct MapDefaults {

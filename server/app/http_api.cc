@@ -101,6 +101,14 @@ net::Response HttpApi::route(net::Request& request, const net::Peer& peer, const
       requireMethod(request, http::verb::get);
       return listMaps(request);
     }
+    if (constexpr std::string_view kImport = ":import"; s.size() == 3 && s[2].ends_with(kImport)) {
+      // Before the map lookup: an import creates its map when missing.
+      if (auth.principal->role != Role::kAdmin) {
+        throw ApiError(403, "permission_denied", "importing a map needs an admin token");
+      }
+      requireMethod(request, http::verb::post);
+      return importMap(request, target, s[2].substr(0, s[2].size() - kImport.size()));
+    }
     const std::shared_ptr<MapWorker> map = service_.findMap(s[2]);
     if (!map) throw ApiError(404, "map_not_found", "no map named '" + s[2] + "'");
     if (s.size() == 3) {
@@ -120,6 +128,8 @@ net::Response HttpApi::route(net::Request& request, const net::Peer& peer, const
     if (s.size() == 8 && s[3] == "layers") return layerTile(request, target, *map);
     if (s.size() == 4 && s[3] == "grid2d.pgm") return gridPgm(request, *map);
     if (s.size() == 4 && s[3] == "grid2d.yaml") return gridYaml(request, *map);
+    if (s.size() == 5 && s[3] == "layers") return layerImage(request, s[4], *map);
+    if (s.size() == 4 && s[3] == "export.bt") return exportBt(request, *map);
   } else if (s[1] == "robots") {
     requireMethod(request, http::verb::get);
     if (s.size() == 2) return listRobots(request);

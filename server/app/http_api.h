@@ -40,6 +40,11 @@ class HttpApi {
   net::Response layerTile(const net::Request& request, const Target& target, const MapWorker& map);
   net::Response gridPgm(const net::Request& request, const MapWorker& map);
   net::Response gridYaml(const net::Request& request, const MapWorker& map);
+  net::Response layerImage(const net::Request& request, const std::string& file, const MapWorker& map);
+  // Whole-map transfer (map_transfer.cc).
+  net::Response exportBt(const net::Request& request, const MapWorker& map);
+  /// POST /v1/maps/{name}:import; creates the map when missing.
+  net::Response importMap(const net::Request& request, const Target& target, const std::string& name);
 
   MappingService& service_;
   const Authenticator& auth_;

@@ -138,7 +138,7 @@ std::string checkHello(const v1::Hello& hello) {
   if (!validName(hello.robot_id())) return "robot_id must be 1..64 characters of [A-Za-z0-9._-]";
   if (!validName(hello.map())) return "map must be 1..64 characters of [A-Za-z0-9._-]";
   if (!std::isfinite(hello.resolution_m()) || hello.resolution_m() < 0.0 ||
-      (hello.resolution_m() > 0.0 && (hello.resolution_m() < 0.005 || hello.resolution_m() > 10.0))) {
+      (hello.resolution_m() > 0.0 && (hello.resolution_m() < kMinResolution_m || hello.resolution_m() > kMaxResolution_m))) {
     return "resolution_m must be 0 (server default) or within [0.005, 10] m";
   }
   for (const v1::SensorDescription& s : hello.sensors()) {

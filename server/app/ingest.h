@@ -14,6 +14,10 @@
 
 namespace rmap::app {
 
+/// Base cell edges a map may be created with (m): by a Hello or an import.
+inline constexpr double kMinResolution_m = 0.005;
+inline constexpr double kMaxResolution_m = 10.0;
+
 /// Characters allowed in robot ids and map names: [A-Za-z0-9._-], 1..64.
 bool validName(const std::string& name);
 

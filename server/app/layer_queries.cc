@@ -43,6 +43,9 @@ net::Response layerResponse(const net::Request& request, int64_t epoch, const Sl
   return response;
 }
 
+/// Pixels of a whole-layer image at most: 8192 × 8192 cells (410 m square at 0.05 m), 128 MiB of pixels.
+constexpr size_t kMaxLayerImagePixels = size_t{1} << 26;
+
 }  // namespace
 
 net::Response HttpApi::layers(const net::Request& request, const MapWorker& worker) {
@@ -92,6 +95,23 @@ net::Response HttpApi::layerTile(const net::Request& request, const Target& targ
   const char* product = *layer == Layer2d::kOccupancy ? "occupancy" : "reflectivity";
   return layerResponse(request, service_.epoch(), slam, product, "image/png",
                        [&](const Grid2dSource& grid) { return encodePng(renderLayerTile(grid, *layer, key)); });
+}
+
+net::Response HttpApi::layerImage(const net::Request& request, const std::string& file, const MapWorker& worker) {
+  const std::optional<Layer2d> layer =
+      file.ends_with(".png") ? parseLayer2d(std::string_view(file).substr(0, file.size() - 4)) : std::nullopt;
+  if (!layer) {
+    throw ApiError(404, "not_found", "no layer image '" + file + "'; there are occupancy.png and reflectivity.png");
+  }
+  const Slam2dLayer& slam = layerOf(worker);
+  const std::string product = std::string(toString(*layer)) + "-image";
+  try {
+    return layerResponse(request, service_.epoch(), slam, product.c_str(), "image/png", [&](const Grid2dSource& grid) {
+      return encodePng(renderLayerImage(grid, *layer, kMaxLayerImagePixels));
+    });
+  } catch (const std::length_error& e) {
+    throw ApiError(413, "image_too_large", e.what());
+  }
 }
 
 net::Response HttpApi::gridPgm(const net::Request& request, const MapWorker& worker) {

@@ -8,6 +8,20 @@
 
 namespace rmap::app {
 
+namespace {
+
+/// Grey of a pixel showing `value` (a probability or a reflectivity, clamped to [0, 1]).
+uint8_t layerGrey(Layer2d layer, float value) {
+  const float grey = layer == Layer2d::kOccupancy ? 1.0f - value : value;
+  return static_cast<uint8_t>(std::lround(255.0f * grey));
+}
+
+float layerValue(const Grid2dSource& grid, Layer2d layer, const Eigen::Vector2i& cell) {
+  return layer == Layer2d::kOccupancy ? grid.probability(cell) : grid.reflectivity(cell);
+}
+
+}  // namespace
+
 std::optional<Layer2d> parseLayer2d(std::string_view name) {
   if (name == "occupancy") return Layer2d::kOccupancy;
   if (name == "reflectivity") return Layer2d::kReflectivity;
@@ -64,7 +78,7 @@ GrayAlphaImage renderLayerTile(const Grid2dSource& grid, Layer2d layer, const La
   for (int64_t cy = y_lo; cy < y_hi; ++cy) {
     for (int64_t cx = x_lo; cx < x_hi; ++cx) {
       const Eigen::Vector2i cell(static_cast<int>(cx), static_cast<int>(cy));
-      float value = layer == Layer2d::kOccupancy ? grid.probability(cell) : grid.reflectivity(cell);
+      float value = layerValue(grid, layer, cell);
       if (!std::isfinite(value)) continue;
       value = std::clamp(value, 0.0f, 1.0f);
       const int64_t col0 = ((cx - tile.min.x()) << shift_up) >> shift_down;
@@ -79,9 +93,32 @@ GrayAlphaImage renderLayerTile(const Grid2dSource& grid, Layer2d layer, const La
   }
   for (size_t i = 0; i < best.size(); ++i) {
     if (best[i] < 0.0f) continue;
-    const float grey = layer == Layer2d::kOccupancy ? 1.0f - best[i] : best[i];
-    image.pixels[2 * i] = static_cast<uint8_t>(std::lround(255.0f * grey));
+    image.pixels[2 * i] = layerGrey(layer, best[i]);
     image.pixels[2 * i + 1] = 255;
+  }
+  return image;
+}
+
+GrayAlphaImage renderLayerImage(const Grid2dSource& grid, Layer2d layer, size_t max_pixels) {
+  const Eigen::AlignedBox2i known = grid.knownCells();
+  if (known.isEmpty()) return {1, 1, std::vector<uint8_t>(2, 0)};
+  const int width = known.max().x() - known.min().x() + 1;
+  const int height = known.max().y() - known.min().y() + 1;
+  const size_t pixels = static_cast<size_t>(width) * static_cast<size_t>(height);
+  if (pixels > max_pixels) {
+    throw std::length_error("the " + std::string(toString(layer)) + " layer is " + std::to_string(width) + " × " +
+                            std::to_string(height) + " cells, more than " + std::to_string(max_pixels) +
+                            " pixels; read it as tiles");
+  }
+  GrayAlphaImage image{width, height, std::vector<uint8_t>(2 * pixels, 0)};
+  size_t i = 0;
+  for (int y = known.max().y(); y >= known.min().y(); --y) {
+    for (int x = known.min().x(); x <= known.max().x(); ++x, i += 2) {
+      const float value = layerValue(grid, layer, {x, y});
+      if (!std::isfinite(value)) continue;
+      image.pixels[i] = layerGrey(layer, std::clamp(value, 0.0f, 1.0f));
+      image.pixels[i + 1] = 255;
+    }
   }
   return image;
 }

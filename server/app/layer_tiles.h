@@ -78,4 +78,11 @@ struct GrayAlphaImage {
 /// and markers stay visible when zoomed out); unknown pixels are transparent.
 GrayAlphaImage renderLayerTile(const Grid2dSource& grid, Layer2d layer, const LayerTileKey& key);
 
+/// The whole layer at one pixel per cell over the known cells' bounding box
+/// (row 0 at its +y edge, as map_server images), pixels as in the tiles; a
+/// 1×1 transparent image when nothing is known.
+/// @param max_pixels  larger images are refused (a grid grows with the area driven)
+/// @throws std::length_error naming the size when width × height > max_pixels
+GrayAlphaImage renderLayerImage(const Grid2dSource& grid, Layer2d layer, size_t max_pixels);
+
 }  // namespace rmap::app

@@ -5,8 +5,10 @@
 #include <nlohmann/json.hpp>
 
 #include <cmath>
+#include <future>
 #include <map>
 #include <set>
+#include <unordered_set>
 
 #include "app/camera_frames.h"
 #include "app/ingest.h"
@@ -21,6 +23,10 @@ namespace {
 using Clock = std::chrono::steady_clock;
 constexpr auto kPoseFlushPeriod = std::chrono::milliseconds(500);
 constexpr size_t kPoseFlushCount = 512;
+/// A map that received nothing for this long fuses its hot blocks: an idle map holds the
+/// compact form a finished benchmark build and a recovered server hold (same cell states,
+/// far fewer cuboids). Streams pause longer than this only between sessions.
+constexpr auto kIdleFuseDelay = std::chrono::seconds(1);
 /// Place recognition takes a robot's next frame of a kind once it moved or turned this much
 /// since its last one (or, without poses, this much later): nearer frames show the same place,
 /// and a lidar at 10 Hz would otherwise keep a core busy.
@@ -53,6 +59,17 @@ Eigen::Isometry3d planarIsometry(const slam2d::Pose2& p, double z_m) {
 int64_t nowNs() {
   return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::system_clock::now().time_since_epoch())
       .count();
+}
+
+/// Writes `blocks` into `map` a slice at a time: replaceBlocks holds every block it writes
+/// expanded (16.9 KB) until it fuses them, so one call for a whole import would need that per block.
+void replaceBlocksInSlices(map3d::CuboidMap& map, const map3d::MapBlocks& blocks) {
+  constexpr size_t kSliceBlocks = 1024;
+  for (size_t begin = 0; begin < blocks.size(); begin += kSliceBlocks) {
+    const size_t end = std::min(blocks.size(), begin + kSliceBlocks);
+    map.replaceBlocks(map3d::MapBlocks(blocks.begin() + static_cast<std::ptrdiff_t>(begin),
+                                       blocks.begin() + static_cast<std::ptrdiff_t>(end)));
+  }
 }
 
 }  // namespace
@@ -154,6 +171,10 @@ void MapWorker::run() {
       batch.swap(queue_);
     }
     for (Item& item : batch) {
+      if (!item.message) {
+        item.applied();
+        continue;
+      }
       const auto start = Clock::now();
       try {
         apply(item.log_id, *item.message, item.robot_id, true);
@@ -165,8 +186,16 @@ void MapWorker::run() {
       metrics_.apply_latency.observe(std::chrono::duration<double>(Clock::now() - start).count());
       if (item.applied) item.applied();
     }
+    if (!batch.empty()) {
+      unfused_changes_ = true;
+      last_apply_ = Clock::now();
+    }
     batch.clear();
     try {
+      if (unfused_changes_ && Clock::now() - last_apply_ >= kIdleFuseDelay) {
+        map_->fuseAll(config_.maps.insert_threads);
+        unfused_changes_ = false;
+      }
       if (!pending_poses_.empty() &&
           (pending_poses_.size() >= kPoseFlushCount || Clock::now() - last_pose_flush_ >= kPoseFlushPeriod)) {
         flushTrajectories();
@@ -448,6 +477,47 @@ void MapWorker::flushTrajectories() {
   pending_poses_.clear();
   last_pose_flush_ = Clock::now();
   for (const auto& [robot, poses] : by_robot) store_.appendTrajectory(robot, poses);
+}
+
+bool MapWorker::importBlocks(const map3d::MapBlocks& blocks, bool replace) {
+  std::promise<bool> done;
+  std::future<bool> result = done.get_future();
+  {
+    std::lock_guard lock(mutex_);
+    if (stopping_) throw std::runtime_error("map " + name_ + " is stopping");
+    queue_.push_back({0, nullptr, {}, [&] {
+                        try {
+                          done.set_value(replaceContent(blocks, replace));
+                        } catch (...) {
+                          done.set_exception(std::current_exception());
+                        }
+                      }});
+  }
+  wake_.notify_one();
+  return result.get();
+}
+
+bool MapWorker::replaceContent(const map3d::MapBlocks& blocks, bool replace) {
+  if (!replace && map_->stats().known_cells > 0) return false;
+  // Durable first, from a copy of the new content: if the store fails, the live map is untouched.
+  map3d::CuboidMap staged(map_->resolution(), map_->occupancyParams(), map_->fusionParams());
+  replaceBlocksInSlices(staged, blocks);
+  flushTrajectories();  // poses of messages inside the snapshot must not depend on the replay
+  const int64_t applied = applied_id_.load();
+  store_.putSnapshot({name_, applied, map3d::encodeMap(staged)});
+  snapshot_id_ = applied;
+  last_snapshot_ = Clock::now();
+  metrics_.snapshots_written.fetch_add(1, std::memory_order_relaxed);
+  // Blocks the import leaves out are emptied, not dropped: their new version tells the tile index.
+  map3d::MapBlocks live = blocks;
+  std::unordered_set<map3d::BlockKey, map3d::BlockKeyHash> filled;
+  for (const auto& [key, cuboids] : blocks) filled.insert(key);
+  map_->forEachBlockVersion([&](const map3d::BlockKey& key, uint64_t) {
+    if (!filled.contains(key)) live.emplace_back(key, std::vector<map3d::PackedCuboid>{});
+  });
+  replaceBlocksInSlices(*map_, live);
+  spdlog::info("map {}: 3D content replaced by an import of {} blocks", name_, blocks.size());
+  return true;
 }
 
 void MapWorker::writeSnapshot() {

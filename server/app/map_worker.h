@@ -26,6 +26,7 @@
 #include "app/slam2d_layer.h"
 #include "app/tiles.h"
 #include "map3d/cuboid_map.h"
+#include "map3d/octomap_interop.h"
 #include "rmap/v1/robot_stream.pb.h"
 #include "store/store.h"
 
@@ -100,6 +101,16 @@ class MapWorker {
   void post(int64_t log_id, std::shared_ptr<const v1::RobotMessage> message, std::string robot_id,
             std::function<void()> applied);
 
+  /// Replaces the 3D map's content by `blocks` (e.g. an imported OctoMap, same resolution) on
+  /// the worker thread, between two messages, and returns once that is durable: a snapshot of
+  /// the new content is stored first, so a failure leaves the map as it was; then the live map
+  /// is rewritten (readers may see it part-way for that long). Blocks the import does not fill
+  /// are emptied. Messages applied later go on top; the 2D layer and trajectories are kept.
+  /// @param replace  when false and the map holds known cells, nothing changes
+  /// @return false when the map was not empty and `replace` is false
+  /// @throws store::StoreError when the snapshot could not be stored (nothing changed)
+  bool importBlocks(const map3d::MapBlocks& blocks, bool replace);
+
   const std::string& name() const { return name_; }
   const map3d::CuboidMap& map() const { return *map_; }
   const Slam2dLayer& slam2d() const { return slam2d_; }
@@ -112,6 +123,7 @@ class MapWorker {
   int64_t appliedId() const;
 
  private:
+  /// A durable message to apply, or (no message) a task that only runs `applied` in its turn.
   struct Item {
     int64_t log_id;
     std::shared_ptr<const v1::RobotMessage> message;
@@ -146,6 +158,8 @@ class MapWorker {
   void publishPose(const RobotPose& pose);
   void flushTrajectories();
   void writeSnapshot();
+  /// importBlocks on the worker thread.
+  bool replaceContent(const map3d::MapBlocks& blocks, bool replace);
 
   std::string name_;
   std::unique_ptr<map3d::CuboidMap> map_;
@@ -186,6 +200,9 @@ class MapWorker {
   std::chrono::steady_clock::time_point last_snapshot_;
   std::vector<std::pair<std::string, store::TrajectoryPose>> pending_poses_;
   std::chrono::steady_clock::time_point last_pose_flush_;
+  /// Messages applied since the hot blocks were last fused, and when the latest was.
+  bool unfused_changes_ = false;
+  std::chrono::steady_clock::time_point last_apply_;
   std::thread thread_;
 };
 

@@ -1,20 +1,22 @@
 #include "map3d/octomap_bt.h"
 
+#include "map3d/octomap_header.h"
+
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <charconv>
 #include <cmath>
 #include <cstdint>
 #include <stdexcept>
-#include <system_error>
 
 namespace rmap::map3d {
 namespace {
 
 // OctoMap compares only this prefix of the first line (AbstractOccupancyOcTree::readBinary).
 constexpr std::string_view kMagic = "# Octomap OcTree binary file";
-constexpr int kTreeDepth = 16;
-constexpr int32_t kKeyOffset = 32768;  // OctoMap key of cell index 0
+constexpr int kTreeDepth = kOctreeDepth;
+constexpr int32_t kKeyOffset = kOctreeKeyOffset;
 
 // 2-bit child codes as OctoMap's std::bitset puts them: child i of a byte
 // occupies bits 2i (set for free and inner) and 2i+1 (set for occupied and inner).
@@ -22,84 +24,16 @@ constexpr unsigned kFreeLeaf = 1;
 constexpr unsigned kOccupiedLeaf = 2;
 constexpr unsigned kInnerNode = 3;
 
-[[noreturn]] void fail(const std::string& what) { throw std::runtime_error("OctoMap .bt: " + what); }
+const std::string kFormat = "OctoMap .bt";
 
-bool isSpace(char c) { return c == ' ' || c == '\t' || c == '\n' || c == '\r' || c == '\v' || c == '\f'; }
+[[noreturn]] void fail(const std::string& what) { throw std::runtime_error(kFormat + ": " + what); }
 
-/// Header reader mirroring AbstractOcTree::readHeader: whitespace-separated
-/// tokens, `#…` comments and unknown keywords skip the rest of their line,
-/// `data` ends the header after its line.
-class HeaderReader {
- public:
-  explicit HeaderReader(std::string_view bytes) : bytes_(bytes) {}
-
-  /// Next whitespace-delimited token, empty at the end of the input.
-  std::string_view token() {
-    while (pos_ < bytes_.size() && isSpace(bytes_[pos_])) ++pos_;
-    const size_t start = pos_;
-    while (pos_ < bytes_.size() && !isSpace(bytes_[pos_])) ++pos_;
-    return bytes_.substr(start, pos_ - start);
-  }
-
-  void skipLine() {
-    const size_t nl = bytes_.find('\n', pos_);
-    pos_ = nl == std::string_view::npos ? bytes_.size() : nl + 1;
-  }
-
-  size_t position() const { return pos_; }
-
- private:
-  std::string_view bytes_;
-  size_t pos_ = 0;
-};
-
-struct Header {
-  double resolution_m = 0.0;
-  uint64_t size = 0;
-  size_t data_offset = 0;
-};
-
-Header readHeader(std::string_view bytes) {
-  if (bytes.substr(0, kMagic.size()) != kMagic) {
-    fail("first line does not start with \"" + std::string(kMagic) + "\" (not an OcTree binary file)");
-  }
-  HeaderReader in(bytes);
-  in.skipLine();
-  std::string_view id;
-  bool have_res = false, have_size = false, have_data = false;
-  Header h;
-  while (!have_data) {
-    const std::string_view t = in.token();
-    if (t.empty()) fail("header ends before the \"data\" line");
-    if (t == "data") {
-      in.skipLine();
-      have_data = true;
-    } else if (t.front() == '#') {
-      in.skipLine();
-    } else if (t == "id") {
-      id = in.token();
-    } else if (t == "res") {
-      const std::string_view v = in.token();
-      const auto [end, ec] = std::from_chars(v.data(), v.data() + v.size(), h.resolution_m);
-      if (ec != std::errc() || end != v.data() + v.size()) fail("bad res value \"" + std::string(v) + "\"");
-      have_res = true;
-    } else if (t == "size") {
-      const std::string_view v = in.token();
-      const auto [end, ec] = std::from_chars(v.data(), v.data() + v.size(), h.size);
-      if (ec != std::errc() || end != v.data() + v.size()) fail("bad size value \"" + std::string(v) + "\"");
-      have_size = true;
-    } else {
-      in.skipLine();  // OctoMap warns about unknown keywords and skips them
-    }
-  }
+OctreeHeader readHeader(std::string_view bytes) {
+  OctreeHeader h = readOctreeHeader(bytes, kMagic, kFormat);
   // "1" is the deprecated id OctoMap still maps to OcTree.
-  if (id != "OcTree" && id != "1") {
-    fail(id.empty() ? "header has no id" : "unsupported tree id \"" + std::string(id) + "\" (only OcTree)");
+  if (h.id != "OcTree" && h.id != "1") {
+    fail(h.id.empty() ? "header has no id" : "unsupported tree id \"" + h.id + "\" (only OcTree)");
   }
-  if (!have_res) fail("header has no res");
-  if (!(h.resolution_m > 0.0) || !std::isfinite(h.resolution_m)) fail("res must be finite and > 0");
-  if (!have_size) fail("header has no size");
-  h.data_offset = in.position();
   return h;
 }
 
@@ -165,20 +99,30 @@ uint64_t mortonCode(const CellKey& c) {
          (spreadBits3(static_cast<uint64_t>(c.z + kKeyOffset)) << 2);
 }
 
-/// Entries are (Morton code << 1) | occupied, sorted and unique by code.
+/// An entry: (Morton code of the cube's lowest cell << 6) | (log2 of its edge << 1) | occupied.
+constexpr int kEntryCodeShift = 6;
+uint64_t cubeEntry(const CellKey& min_cell, int log2_size, bool occupied) {
+  return (mortonCode(min_cell) << kEntryCodeShift) | (static_cast<uint64_t>(log2_size) << 1) | (occupied ? 1u : 0u);
+}
+int entryLog2Size(uint64_t e) { return static_cast<int>((e >> 1) & 31u); }
+
+/// Writes entries sorted by code, of disjoint aligned cubes of edge at most 2^15 cells.
 class NodeWriter {
  public:
   explicit NodeWriter(std::string& out) : out_(out) {}
 
   /// Writes the subtree of the node at `depth` holding the entries [begin, end)
-  /// (non-empty) and returns its code in the parent. A node whose 8 children
-  /// are leaves of one state is pruned: its bytes are taken back and it
-  /// becomes a leaf. The root (depth 0) is always written.
+  /// (non-empty) and returns its code in the parent. A cube as large as the
+  /// node is the node, a leaf. A node whose 8 children are leaves of one state
+  /// is pruned: its bytes are taken back and it becomes a leaf. The root
+  /// (depth 0) is always written.
   unsigned write(const uint64_t* begin, const uint64_t* end, int depth) {
-    if (depth == kTreeDepth) return (*begin & 1u) ? kOccupiedLeaf : kFreeLeaf;
+    if (end - begin == 1 && entryLog2Size(*begin) == kTreeDepth - depth) {
+      return (*begin & 1u) ? kOccupiedLeaf : kFreeLeaf;
+    }
     const size_t at = out_.size();
     out_.append(2, '\0');
-    const int shift = 1 + 3 * (kTreeDepth - 1 - depth);
+    const int shift = kEntryCodeShift + 3 * (kTreeDepth - 1 - depth);
     unsigned codes = 0;
     const uint64_t* first = begin;
     for (unsigned i = 0; i < 8 && first != end; ++i) {
@@ -210,54 +154,31 @@ uint64_t countNodes(std::string_view data) {
 
 }  // namespace
 
+bool looksLikeBt(std::string_view bytes) { return bytes.substr(0, kMagic.size()) == kMagic; }
+
 BtTree parseBt(std::string_view bytes) {
-  const Header header = readHeader(bytes);
+  const OctreeHeader header = readHeader(bytes);
   BtTree tree;
   tree.resolution_m = header.resolution_m;
   const std::string_view data = bytes.substr(header.data_offset);
-  if (header.size == 0) {
-    // OctoMap writes an empty tree as "size 0" and no data at all.
-    if (!data.empty()) fail(std::to_string(data.size()) + " bytes of data after a header with size 0");
-    return tree;
-  }
+  if (isEmptyTree(header, data, kFormat)) return tree;
   NodeReader reader(data, tree.leaves);
   reader.readInner(0, {0, 0, 0});
-  if (reader.position() != data.size()) {
-    fail(std::to_string(data.size() - reader.position()) + " trailing bytes after the tree");
-  }
-  if (reader.nodes() != header.size) {
-    fail("tree has " + std::to_string(reader.nodes()) + " nodes but the header says size " +
-         std::to_string(header.size));
-  }
+  checkTreeEnd(header, data, reader.position(), reader.nodes(), kFormat);
   return tree;
 }
 
-std::string writeBt(double resolution_m, std::vector<BtCell> cells) {
-  if (!(resolution_m > 0.0) || !std::isfinite(resolution_m)) {
-    throw std::invalid_argument("writeBt: resolution must be finite and > 0, got " + std::to_string(resolution_m));
-  }
-  std::vector<uint64_t> entries;
-  entries.reserve(cells.size());
-  for (const BtCell& c : cells) {
-    if (!cellInRange(c.cell)) {
-      throw std::invalid_argument("writeBt: cell (" + std::to_string(c.cell.x) + ", " + std::to_string(c.cell.y) +
-                                  ", " + std::to_string(c.cell.z) + ") is outside [-32768, 32768)");
-    }
-    entries.push_back((mortonCode(c.cell) << 1) | (c.occupied ? 1u : 0u));
-  }
-  cells = {};  // release the input before sorting
-  // Stable by code so that among duplicates the last input stays last and wins.
-  std::stable_sort(entries.begin(), entries.end(), [](uint64_t a, uint64_t b) { return (a >> 1) < (b >> 1); });
-  size_t n = 0;
-  for (size_t i = 0; i < entries.size(); ++i) {
-    if (n > 0 && (entries[n - 1] >> 1) == (entries[i] >> 1)) {
-      entries[n - 1] = entries[i];
-    } else {
-      entries[n++] = entries[i];
-    }
-  }
-  entries.resize(n);
+namespace {
 
+void checkResolution(double resolution_m, const char* who) {
+  if (!(resolution_m > 0.0) || !std::isfinite(resolution_m)) {
+    throw std::invalid_argument(std::string(who) + ": resolution must be finite and > 0, got " +
+                                std::to_string(resolution_m));
+  }
+}
+
+/// The file around the tree of `entries` (sorted by code, cubes disjoint).
+std::string writeEntries(double resolution_m, const std::vector<uint64_t>& entries) {
   std::string data;
   if (!entries.empty()) NodeWriter(data).write(entries.data(), entries.data() + entries.size(), 0);
 
@@ -273,6 +194,55 @@ std::string writeBt(double resolution_m, std::vector<BtCell> cells) {
   out += "\ndata\n";
   out += data;
   return out;
+}
+
+}  // namespace
+
+std::string writeBt(double resolution_m, std::vector<BtCell> cells) {
+  checkResolution(resolution_m, "writeBt");
+  std::vector<uint64_t> entries;
+  entries.reserve(cells.size());
+  for (const BtCell& c : cells) {
+    if (!cellInRange(c.cell)) {
+      throw std::invalid_argument("writeBt: cell (" + std::to_string(c.cell.x) + ", " + std::to_string(c.cell.y) +
+                                  ", " + std::to_string(c.cell.z) + ") is outside [-32768, 32768)");
+    }
+    entries.push_back(cubeEntry(c.cell, 0, c.occupied));
+  }
+  cells = {};  // release the input before sorting
+  // Stable by code so that among duplicates the last input stays last and wins.
+  const auto byCode = [](uint64_t a, uint64_t b) { return (a >> kEntryCodeShift) < (b >> kEntryCodeShift); };
+  std::stable_sort(entries.begin(), entries.end(), byCode);
+  size_t n = 0;
+  for (size_t i = 0; i < entries.size(); ++i) {
+    if (n > 0 && !byCode(entries[n - 1], entries[i])) {
+      entries[n - 1] = entries[i];
+    } else {
+      entries[n++] = entries[i];
+    }
+  }
+  entries.resize(n);
+  return writeEntries(resolution_m, entries);
+}
+
+std::string writeBtCubes(double resolution_m, const std::vector<BtLeaf>& cubes) {
+  checkResolution(resolution_m, "writeBtCubes");
+  std::vector<uint64_t> entries;
+  entries.reserve(cubes.size());
+  for (const BtLeaf& c : cubes) {
+    const int32_t s = c.size_cells;
+    const CellKey last{c.min_cell.x + s - 1, c.min_cell.y + s - 1, c.min_cell.z + s - 1};
+    const auto aligned = [&](int32_t cell) { return (cell + kKeyOffset) % s == 0; };
+    if (s < 1 || s > kKeyOffset || !std::has_single_bit(static_cast<uint32_t>(s)) || !cellInRange(c.min_cell) ||
+        !cellInRange(last) || !aligned(c.min_cell.x) || !aligned(c.min_cell.y) || !aligned(c.min_cell.z)) {
+      throw std::invalid_argument("writeBtCubes: the cube at (" + std::to_string(c.min_cell.x) + ", " +
+                                  std::to_string(c.min_cell.y) + ", " + std::to_string(c.min_cell.z) + ") of edge " +
+                                  std::to_string(s) + " is not an aligned power of two of at most 32768 cells");
+    }
+    entries.push_back(cubeEntry(c.min_cell, std::countr_zero(static_cast<uint32_t>(s)), c.occupied));
+  }
+  std::sort(entries.begin(), entries.end());
+  return writeEntries(resolution_m, entries);
 }
 
 }  // namespace rmap::map3d

@@ -35,6 +35,9 @@ struct BtCell {
   bool occupied;
 };
 
+/// Whether `bytes` start with the `.bt` first line.
+bool looksLikeBt(std::string_view bytes);
+
 /// Parses `.bt` bytes.
 /// @throws std::runtime_error with a message naming the problem (bad magic,
 ///         unsupported id, bad size/res, truncated data, trailing bytes, node
@@ -48,5 +51,12 @@ BtTree parseBt(std::string_view bytes);
 /// @param resolution_m  base cell edge, > 0
 /// @throws std::invalid_argument for a cell outside [-32768, 32768) or a bad resolution
 std::string writeBt(double resolution_m, std::vector<BtCell> cells);
+
+/// As writeBt, from disjoint cubes given as leaves (aligned to their edge, a
+/// power of two of at most 32768 cells), e.g. cuboids cut into octants: 8
+/// bytes of memory per cube rather than per cell. Cubes must not overlap.
+/// @throws std::invalid_argument for a cube that is not aligned, too large,
+///         outside the addressable range, or a bad resolution
+std::string writeBtCubes(double resolution_m, const std::vector<BtLeaf>& cubes);
 
 }  // namespace rmap::map3d

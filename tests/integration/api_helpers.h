@@ -1,15 +1,17 @@
 #pragma once
 /// @file api_helpers.h
-/// HTTP helpers shared by the end-to-end tests.
+/// HTTP helpers shared by the end-to-end tests, and streaming a list of messages as one robot.
 
 #include <gtest/gtest.h>
 
 #include <Eigen/Core>
 #include <nlohmann/json.hpp>
+#include <sstream>
 #include <string>
 #include <vector>
 
 #include "client/http_client.h"
+#include "client/robot_client.h"
 #include "rmap/v1/map_api.pb.h"
 
 namespace rmap::testing {
@@ -36,11 +38,56 @@ inline v1::OccupancyBatchResponse batchQuery(client::HttpClient& http, const std
   return response;
 }
 
+/// Config lines giving rmapd one token per role: robot-token-1 (robot bot-1), viewer-token-1, admin-token-1.
+inline constexpr const char* kRoleTokensYaml = R"(
+auth:
+  tokens:
+    - {token: robot-token-1, role: robot, robot_id: bot-1}
+    - {token: viewer-token-1, role: viewer}
+    - {token: admin-token-1, role: admin}
+)";
+
 /// Value of an unlabelled metric in Prometheus text, -1 when absent.
 inline double metricValue(const std::string& text, const std::string& name) {
   const std::string key = "\n" + name + " ";
   const size_t at = text.find(key);
   return at == std::string::npos ? -1.0 : std::stod(text.substr(at + key.size()));
+}
+
+/// Streams messages as one robot and waits for every ack.
+inline void streamAll(const std::string& url, const std::string& robot_id, const std::string& map,
+            const std::vector<v1::RobotMessage>& messages, const v1::SensorDescription* sensor = nullptr) {
+  client::RobotClientOptions options;
+  options.server_url = url;
+  options.hello.set_robot_id(robot_id);
+  options.hello.set_map(map);
+  if (sensor) *options.hello.add_sensors() = *sensor;
+  client::RobotClient robot(options);
+  robot.connect();
+  for (const v1::RobotMessage& m : messages) robot.send(m);
+  ASSERT_TRUE(robot.waitAllAcked(std::chrono::seconds(60)));
+}
+
+/// Every cuboid of a map, straight from the box endpoint.
+inline std::vector<nlohmann::json> allCuboids(client::HttpClient& http, const std::string& map) {
+  const nlohmann::json info = getJson(http, "/v1/maps/" + map);
+  std::vector<nlohmann::json> out;
+  const auto corner = [&](const char* key) {
+    std::ostringstream s;
+    s.precision(17);
+    s << info["bounds"][key][0].get<double>() << "," << info["bounds"][key][1].get<double>() << ","
+      << info["bounds"][key][2].get<double>();
+    return s.str();
+  };
+  std::string token;
+  do {
+    const nlohmann::json page = getJson(http, "/v1/maps/" + map + "/occupancy/box?min=" + corner("min") +
+                                                  "&max=" + corner("max") + "&limit=100000" +
+                                                  (token.empty() ? "" : "&page_token=" + token));
+    for (const nlohmann::json& c : page["cuboids"]) out.push_back(c);
+    token = page["next_page_token"].is_string() ? page["next_page_token"].get<std::string>() : "";
+  } while (!token.empty());
+  return out;
 }
 
 }  // namespace rmap::testing

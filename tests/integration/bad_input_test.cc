@@ -16,15 +16,7 @@
 namespace rmap::testing {
 namespace {
 
-constexpr const char* kConfig = R"(
-auth:
-  tokens:
-    - {token: robot-token-1, role: robot, robot_id: bot-1}
-    - {token: viewer-token-1, role: viewer}
-    - {token: admin-token-1, role: admin}
-limits:
-  max_frame_bytes: 1048576
-)";
+const std::string kConfig = std::string(kRoleTokensYaml) + "limits:\n  max_frame_bytes: 1048576\n";
 
 class BadInput : public ::testing::Test {
  protected:

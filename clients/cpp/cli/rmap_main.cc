@@ -17,6 +17,10 @@ int main(int argc, char** argv) {
   app.require_subcommand(1, 1);
   int exit_code = 0;
   // One line per subcommand (commands.h).
+  rmap::cli::addReplayCommand(app, exit_code);
+  rmap::cli::addQueryCommand(app, exit_code);
+  rmap::cli::addExportCommand(app, exit_code);
+  rmap::cli::addImportCommand(app, exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& error) {

@@ -13,6 +13,15 @@ namespace {
 
 using slam2d::Pose2;
 
+/// robot⁻¹ · laser, differences taken before rotating: exactly the identity when the log gives
+/// the laser the robot's pose (as corrected logs do), where slam2d::between leaves ~1e-16 m of
+/// rounding that differs from scan to scan and cannot be declared once for a robot.
+Pose2 mountOf(const Pose2& robot, const Pose2& laser) {
+  const double c = std::cos(robot.theta_rad), s = std::sin(robot.theta_rad);
+  const double dx = laser.x_m - robot.x_m, dy = laser.y_m - robot.y_m;
+  return {c * dx + s * dy, -s * dx + c * dy, slam2d::normalizeAngle(laser.theta_rad - robot.theta_rad)};
+}
+
 constexpr float kNoReturn = std::numeric_limits<float>::infinity();
 constexpr float kErrorReading = std::numeric_limits<float>::quiet_NaN();
 
@@ -201,7 +210,7 @@ CarmenLog parseCarmenLog(std::string_view text, const std::string& source, const
   log.flaser_no_return_m = options.flaser_no_return_m > 0.0f ? options.flaser_no_return_m : 0.99f * largest_flaser;
   for (CarmenScan& s : log.scans) {
     if (s.scan.model == "FLASER") s.scan.range_max_m = log.flaser_no_return_m;
-    s.scan.sensor_mount = slam2d::between(s.robot_pose, s.laser_pose);
+    s.scan.sensor_mount = mountOf(s.robot_pose, s.laser_pose);
     applyRangeConventions(s.scan);
   }
   return log;

@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include "app/loop_closures.h"
+#include "map3d/octomap_bt.h"
 #include "service_test_support.h"
 
 namespace rmap::app {
@@ -151,6 +152,91 @@ TEST_F(HttpApiTest, MetricsReportOpenConnections) {
   const net::Response response = get("/metrics");
   ASSERT_EQ(response.result_int(), 200);
   EXPECT_NE(("\n" + response.body()).find("\nrmap_http_connections 7\n"), std::string::npos) << response.body();
+}
+
+/// A .bt tree of a wall (occupied) in front of free space, 0.1 m cells.
+std::string wallBt() {
+  std::vector<map3d::BtCell> cells;
+  for (int y = -20; y < 20; ++y) {
+    for (int z = 0; z < 10; ++z) {
+      cells.push_back({{30, y, z}, true});
+      for (int x = 0; x < 30; ++x) cells.push_back({{x, y, z}, false});
+    }
+  }
+  return map3d::writeBt(0.1, cells);
+}
+
+TEST_F(HttpApiTest, ImportedTreeExportsTheSameTreeAndIsRefusedTwice) {
+  const std::string bt = wallBt();
+  net::Request request{http::verb::post, "/v1/maps/room:import", 11};
+  request.body() = bt;
+  net::Response response = api_.handle(request, kLoopback);
+  ASSERT_EQ(response.result_int(), 200) << response.body();
+  const json answer = json::parse(response.body());
+  EXPECT_TRUE(answer["created"].get<bool>());
+  EXPECT_EQ(answer["format"], "bt");
+  EXPECT_EQ(answer["map"]["known_cells"].get<int>(), 40 * 10 * 31);
+  EXPECT_EQ(answer["map"]["occupied_cells"].get<int>(), 40 * 10);
+  EXPECT_EQ(json::parse(get("/v1/maps/room/occupancy?x=3.05&y=0&z=0.5").body())["state"], "occupied");
+  EXPECT_EQ(json::parse(get("/v1/maps/room/occupancy?x=1&y=0&z=0.5").body())["state"], "free");
+  // Out again: the very same tree.
+  response = get("/v1/maps/room/export.bt");
+  ASSERT_EQ(response.result_int(), 200);
+  EXPECT_EQ(header(response, http::field::content_type), "application/octet-stream");
+  EXPECT_EQ(response.body(), bt);
+  // Not again without replace=true; nothing changed.
+  const json before = json::parse(get("/v1/maps/room").body());
+  response = api_.handle(request, kLoopback);
+  EXPECT_EQ(response.result_int(), 409);
+  EXPECT_EQ(json::parse(response.body())["error"]["code"], "map_not_empty");
+  EXPECT_EQ(json::parse(get("/v1/maps/room").body())["version"], before["version"]);
+  request.target("/v1/maps/room:import?replace=yes");
+  EXPECT_EQ(api_.handle(request, kLoopback).result_int(), 400);
+  request.target("/v1/maps/room:import?replace=true");
+  EXPECT_EQ(api_.handle(request, kLoopback).result_int(), 200);
+  // Only POST, a valid name, an OctoMap body.
+  response = get("/v1/maps/room:import");
+  EXPECT_EQ(response.result_int(), 405);
+  EXPECT_EQ(header(response, http::field::allow), "POST");
+  request.target("/v1/maps/bad%20name:import");
+  EXPECT_EQ(api_.handle(request, kLoopback).result_int(), 400);
+  request.target("/v1/maps/other:import");
+  request.body() = "not a tree";
+  response = api_.handle(request, kLoopback);
+  EXPECT_EQ(response.result_int(), 400);
+  EXPECT_NE(json::parse(response.body())["error"]["message"].get<std::string>().find("not an OctoMap file"),
+            std::string::npos);
+  EXPECT_EQ(get("/v1/maps/other").result_int(), 404);
+}
+
+TEST(HttpApiImport, AnImportIsBackAfterARestart) {
+  store::TempDir dir;
+  const std::string bt = wallBt();
+  {
+    MappingService service(testing::configIn(dir.path()));
+    Authenticator auth{AuthConfig{}};
+    HttpApi api(service, auth);
+    net::Request request{http::verb::post, "/v1/maps/room:import", 11};
+    request.body() = bt;
+    ASSERT_EQ(api.handle(request, kLoopback).result_int(), 200);
+  }
+  MappingService service(testing::configIn(dir.path()));
+  Authenticator auth{AuthConfig{}};
+  HttpApi api(service, auth);
+  net::Request request{http::verb::get, "/v1/maps/room/export.bt", 11};
+  const net::Response response = api.handle(request, kLoopback);
+  ASSERT_EQ(response.result_int(), 200);
+  EXPECT_EQ(response.body(), bt);
+}
+
+TEST_F(HttpApiTest, WholeLayerImagesNeedALayerAndAKnownName) {
+  service_.openMap("lab", 0.0);
+  net::Response response = get("/v1/maps/lab/layers/reflectivity.png");
+  EXPECT_EQ(response.result_int(), 404);
+  EXPECT_EQ(json::parse(response.body())["error"]["code"], "layer_not_found");
+  response = get("/v1/maps/lab/layers/heights.png");
+  EXPECT_EQ(response.result_int(), 404);
+  EXPECT_EQ(json::parse(response.body())["error"]["code"], "not_found");
 }
 
 TEST(HttpApiRestart, TileETagsOfAnEarlierStartNeverMatch) {

@@ -98,3 +98,42 @@ TEST(LayerTiles, ZoomedInCellsCoverBlocksOfPixels) {
 
 }  // namespace
 }  // namespace rmap::app
+
+namespace rmap::app {
+namespace {
+
+TEST(LayerTiles, WholeLayerImageCoversTheKnownCellsWithRowZeroAtPlusY) {
+  testing::FakeGrid2d grid(0.05);
+  grid.set(-3, 4, 0.8f, 0.25f);  // top-left pixel
+  grid.set(2, -1, 0.2f);         // bottom-right pixel, no reflectivity
+  const GrayAlphaImage occupancy = renderLayerImage(grid, Layer2d::kOccupancy, 1000);
+  ASSERT_EQ(occupancy.width, 6);
+  ASSERT_EQ(occupancy.height, 6);
+  const auto pixel = [](const GrayAlphaImage& image, int col, int row) {
+    const size_t i = 2 * static_cast<size_t>(row * image.width + col);
+    return std::pair<int, int>(image.pixels[i], image.pixels[i + 1]);
+  };
+  EXPECT_EQ(pixel(occupancy, 0, 0), (std::pair<int, int>(51, 255)));   // 255 · (1 − 0.8)
+  EXPECT_EQ(pixel(occupancy, 5, 5), (std::pair<int, int>(204, 255)));  // 255 · (1 − 0.2)
+  EXPECT_EQ(pixel(occupancy, 1, 0), (std::pair<int, int>(0, 0)));      // unknown: transparent
+  const GrayAlphaImage reflectivity = renderLayerImage(grid, Layer2d::kReflectivity, 1000);
+  EXPECT_EQ(pixel(reflectivity, 0, 0), (std::pair<int, int>(64, 255)));  // 255 · 0.25
+  EXPECT_EQ(pixel(reflectivity, 5, 5), (std::pair<int, int>(0, 0)));     // no reflectivity fused
+  // The same pixels as the native-zoom tile holding them.
+  const GrayAlphaImage tile = renderLayerTile(grid, Layer2d::kOccupancy, {8, (-3 + 32768) >> 8, (32767 - 4) >> 8});
+  EXPECT_EQ(pixel(tile, (-3 + 32768) & 255, (32767 - 4) & 255), pixel(occupancy, 0, 0));
+}
+
+TEST(LayerTiles, WholeLayerImageOfNothingAndOfTooMuch) {
+  testing::FakeGrid2d grid(0.05);
+  const GrayAlphaImage empty = renderLayerImage(grid, Layer2d::kReflectivity, 1);
+  EXPECT_EQ(empty.width, 1);
+  EXPECT_EQ(empty.pixels, (std::vector<uint8_t>{0, 0}));
+  grid.set(0, 0, 0.5f);
+  grid.set(99, 9, 0.5f);
+  EXPECT_NO_THROW(renderLayerImage(grid, Layer2d::kOccupancy, 1000));
+  EXPECT_THROW(renderLayerImage(grid, Layer2d::kOccupancy, 999), std::length_error);
+}
+
+}  // namespace
+}  // namespace rmap::app

@@ -290,5 +290,31 @@ TEST(OctomapBt, WriteRejectsBadArguments) {
   }
 }
 
+TEST(OctomapBt, CubesWriteTheTreeTheirCellsWrite) {
+  // Eight 2-cell cubes of one state fill a 4-cell octant, which is pruned; a free cube beside it.
+  std::vector<BtLeaf> cubes;
+  std::vector<BtCell> cells;
+  for (int i = 0; i < 8; ++i) {
+    const CellKey min{(i & 1) * 2, (i & 2), (i & 4) / 2};
+    cubes.push_back({min, 2, true});
+    for (int k = 0; k < 8; ++k) cells.push_back({{min.x + (k & 1), min.y + ((k >> 1) & 1), min.z + (k >> 2)}, true});
+  }
+  cubes.push_back({{-8, -8, -8}, 8, false});
+  for (int z = -8; z < 0; ++z) {
+    for (int y = -8; y < 0; ++y) {
+      for (int x = -8; x < 0; ++x) cells.push_back({{x, y, z}, false});
+    }
+  }
+  const std::string bytes = writeBtCubes(0.1, cubes);
+  EXPECT_EQ(bytes, writeBt(0.1, cells));
+  const auto tree = readWithOctomap(bytes);
+  EXPECT_TRUE(tree->isNodeOccupied(tree->search(octoKey({3, 3, 3}))));
+  EXPECT_FALSE(tree->isNodeOccupied(tree->search(octoKey({-8, -1, -5}))));
+  EXPECT_EQ(tree->search(octoKey({4, 0, 0})), nullptr);
+  for (const BtLeaf& bad : {BtLeaf{{1, 0, 0}, 2, true}, BtLeaf{{0, 0, 0}, 3, true}, BtLeaf{{0, 0, 0}, 65536, true}}) {
+    EXPECT_THROW(writeBtCubes(0.1, {bad}), std::invalid_argument);
+  }
+}
+
 }  // namespace
 }  // namespace rmap::map3d

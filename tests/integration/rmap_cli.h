@@ -1,0 +1,44 @@
+#pragma once
+/// @file rmap_cli.h
+/// Runs the real `rmap` binary (RMAP_CLI_PATH) for end-to-end tests and
+/// captures what it printed.
+
+#include <sys/wait.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+namespace rmap::testing {
+
+struct CliRun {
+  int exit_code = -1;
+  std::string out;  ///< stdout
+  std::string err;  ///< stderr
+};
+
+inline std::string fileText(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream text;
+  text << in.rdbuf();
+  return std::move(text).str();
+}
+
+#ifdef RMAP_CLI_PATH  // defined once the CLI has sources
+/// `rmap <args>` (arguments already quoted for the shell), output kept in `scratch`.
+inline CliRun runRmap(const std::string& args, const std::filesystem::path& scratch) {
+  const std::filesystem::path out = scratch / "rmap.out", err = scratch / "rmap.err";
+  const std::string command =
+      std::string(RMAP_CLI_PATH) + " " + args + " > '" + out.string() + "' 2> '" + err.string() + "'";
+  const int status = std::system(command.c_str());
+  CliRun run;
+  run.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  run.out = fileText(out);
+  run.err = fileText(err);
+  return run;
+}
+#endif
+
+}  // namespace rmap::testing
