@@ -94,6 +94,10 @@ void loadConfigFile(const std::filesystem::path& file, Config& config) {
     read(root, "viewer_tick_ms", config.viewer_tick_ms);
     read(root, "log_level", config.log_level);
     readAuth(root["auth"], config.auth);
+    if (const YAML::Node tls = root["tls"]) {
+      if (const YAML::Node file = tls["certificate_file"]) config.tls.certificate_file = file.as<std::string>();
+      if (const YAML::Node file = tls["private_key_file"]) config.tls.private_key_file = file.as<std::string>();
+    }
     readLimits(root["limits"], config.limits);
     readMaps(root["maps"], config.maps);
     if (const YAML::Node loop = root["loop_closure"]) {
@@ -182,6 +186,9 @@ void validate(const Config& config) {
                                 ") does not fit in limits.max_body_bytes (" +
                                 std::to_string(config.limits.max_body_bytes) + "): a protobuf batch takes " +
                                 std::to_string(kBatchBytesPerPoint) + " bytes per point");
+  }
+  if (config.tls.enabled() && (config.tls.certificate_file.empty() || config.tls.private_key_file.empty())) {
+    throw std::invalid_argument("tls needs both certificate_file and private_key_file");
   }
   for (const TokenConfig& t : config.auth.tokens) {
     if (t.token.size() < 8) throw std::invalid_argument("auth tokens must have at least 8 characters");

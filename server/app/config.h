@@ -65,6 +65,14 @@ struct LoopClosureConfig {
   bool reflectivity_patches = true;  ///< reflectivity patches of the 2D map around 2D-laser robots
 };
 
+/// TLS on the listening port (docs/API.md §2): both files set, or neither
+/// (plain TCP). Read at start-up; relative paths from the working directory.
+struct TlsConfig {
+  std::filesystem::path certificate_file;  ///< PEM: the server's certificate, then any intermediates
+  std::filesystem::path private_key_file;  ///< PEM, unencrypted
+  bool enabled() const { return !certificate_file.empty() || !private_key_file.empty(); }
+};
+
 /// The build's web viewer directory (RMAP_WEB_ROOT, set by CMake; by default
 /// the source tree's web/), so a build tree serves the viewer as it is.
 std::filesystem::path defaultWebRoot();
@@ -81,6 +89,7 @@ struct Config {
   /// Milliseconds between tile-change scans pushed to viewers.
   int viewer_tick_ms = 200;
   AuthConfig auth;
+  TlsConfig tls;
   LimitsConfig limits;
   MapDefaults maps;
   Slam2dConfig slam2d;

@@ -12,6 +12,7 @@
 #include "app/rmapd_service.h"
 #include "app/static_files.h"
 #include "net/server.h"
+#include "net/tls_context.h"
 
 namespace {
 
@@ -46,6 +47,7 @@ int main(int argc, char** argv) {
   CLI11_PARSE(cli, argc, argv);
 
   rmap::app::Config config;
+  std::shared_ptr<boost::asio::ssl::context> tls;
   try {
     if (!config_file.empty()) rmap::app::loadConfigFile(config_file, config);
     if (!listen.empty()) rmap::app::setListenAddress(listen, config);
@@ -54,6 +56,14 @@ int main(int argc, char** argv) {
     if (!log_level.empty()) config.log_level = log_level;
     if (io_threads > 0) config.io_threads = io_threads;
     rmap::app::validate(config);
+    // Read now, so a missing, unreadable or mismatched file is a config error (exit 2).
+    if (config.tls.enabled()) {
+      try {
+        tls = rmap::net::makeServerTlsContext(config.tls.certificate_file, config.tls.private_key_file);
+      } catch (const std::exception& e) {
+        throw std::runtime_error(std::string("tls: ") + e.what());
+      }
+    }
   } catch (const std::exception& e) {
     std::cerr << "rmapd: " << e.what() << "\n";
     return 2;
@@ -86,15 +96,17 @@ int main(int argc, char** argv) {
     options.port = config.listen_port;
     options.io_threads = config.io_threads;
     options.max_body_bytes = config.limits.max_body_bytes;
+    options.tls = tls;
     rmap::net::Server server(options, handlers);
     service.setConnectionCounter([&server] { return server.connections(); });
     server.start();
     const std::string host = config.listen_host.find(':') != std::string::npos ? "[" + config.listen_host + "]"
                                                                                  : config.listen_host;
-    spdlog::info("rmapd {} listening on http://{}:{}/ (data in {}{})", rmap::app::MappingService::version(), host,
-                 server.port(), config.data_dir.string(),
+    const char* scheme = tls ? "https" : "http";
+    spdlog::info("rmapd {} listening on {}://{}:{}/ (data in {}{})", rmap::app::MappingService::version(), scheme,
+                 host, server.port(), config.data_dir.string(),
                  config.auth.tokens.empty() ? ", loopback clients only" : "");
-    std::cout << "rmapd listening on http://" << host << ":" << server.port() << "/" << std::endl;
+    std::cout << "rmapd listening on " << scheme << "://" << host << ":" << server.port() << "/" << std::endl;
     const int signal = waitForStopSignal();
     spdlog::info("signal {}: stopping", signal);
     server.stop();

@@ -6,6 +6,7 @@
 #include <boost/asio/write.hpp>
 #include <boost/beast/core/bind_handler.hpp>
 #include <boost/beast/core/flat_buffer.hpp>
+#include <boost/beast/core/stream_traits.hpp>
 #include <boost/beast/core/string.hpp>
 #include <boost/beast/http/rfc7230.hpp>
 #include <boost/beast/http/parser.hpp>
@@ -98,15 +99,19 @@ using Clock = std::chrono::steady_clock;
 constexpr std::chrono::seconds kLingerTime{2};
 constexpr size_t kDrainChunk = 64u << 10;
 
-class HttpSession final : public Session, public std::enable_shared_from_this<HttpSession> {
+template <class Stream>
+class HttpSession final : public Session, public std::enable_shared_from_this<HttpSession<Stream>> {
+  using std::enable_shared_from_this<HttpSession>::shared_from_this;
+  using std::enable_shared_from_this<HttpSession>::weak_from_this;
+
  public:
-  HttpSession(asio::ip::tcp::socket socket, std::shared_ptr<ServerState> state)
+  HttpSession(Stream stream, std::shared_ptr<ServerState> state)
       : state_(std::move(state)),
         count_(state_->connections),
-        socket_(std::move(socket)),
-        idle_timer_(socket_.get_executor()) {
+        stream_(std::move(stream)),
+        idle_timer_(stream_.get_executor()) {
     beast::error_code ec;
-    const auto remote = socket_.remote_endpoint(ec);
+    const auto remote = socket().remote_endpoint(ec);
     if (!ec) peer_ = peerFromEndpoint(remote);
   }
 
@@ -117,17 +122,32 @@ class HttpSession final : public Session, public std::enable_shared_from_this<Ht
   void start() {
     handle_ = state_->enroll(weak_from_this());
     if (!handle_) return;  // stopping: the socket closes with this session
-    asio::dispatch(socket_.get_executor(), [self = shared_from_this()] {
-      self->readRequest();
-      self->armIdleTimer(self->deadline_);
-    });
+    asio::dispatch(stream_.get_executor(), [self = shared_from_this()] { self->begin(); });
   }
 
   void shutdown() override {
-    asio::post(socket_.get_executor(), [self = shared_from_this()] { self->closeSocket(); });
+    asio::post(stream_.get_executor(), [self = shared_from_this()] { self->closeSocket(); });
   }
 
  private:
+  asio::ip::tcp::socket& socket() { return beast::get_lowest_layer(stream_); }
+
+  /// The TLS handshake, like a request, must complete within the idle
+  /// timeout; a failed one (a plain-HTTP client, a client that does not
+  /// trust the certificate) closes the connection without an answer.
+  void begin() {
+    if constexpr (kIsTls<Stream>) {
+      deadline_ = Clock::now() + state_->options.idle_timeout;
+      stream_.async_handshake(asio::ssl::stream_base::server, [self = shared_from_this()](beast::error_code ec) {
+        if (ec) return self->closeSocket();
+        self->readRequest();
+      });
+    } else {
+      readRequest();
+    }
+    armIdleTimer(deadline_);
+  }
+
   // The idle timeout: each read or write sets the deadline it must meet, and
   // one timer checks the deadline when it fires. Re-arming a timer per
   // operation (as beast::tcp_stream does) costs a good share of a small
@@ -157,7 +177,7 @@ class HttpSession final : public Session, public std::enable_shared_from_this<Ht
     // any of the body is read.
     parser_->body_limit(options.max_body_bytes);
     deadline_ = Clock::now() + options.idle_timeout;
-    http::async_read_header(socket_, buffer_, *parser_,
+    http::async_read_header(stream_, buffer_, *parser_,
                             beast::bind_front_handler(&HttpSession::onHeader, shared_from_this()));
   }
 
@@ -168,7 +188,7 @@ class HttpSession final : public Session, public std::enable_shared_from_this<Ht
     if (parser_->is_done()) return handleRequest();
     // headerError() let through no Expect but 100-continue.
     if (request.version() < 11 || request.find(http::field::expect) == request.end()) return readBody();
-    asio::async_write(socket_, asio::buffer(kContinue.data(), kContinue.size()),
+    asio::async_write(stream_, asio::buffer(kContinue.data(), kContinue.size()),
                       [self = shared_from_this()](beast::error_code write_ec, size_t) {
                         if (write_ec) return self->closeSocket();
                         self->readBody();
@@ -178,7 +198,7 @@ class HttpSession final : public Session, public std::enable_shared_from_this<Ht
   /// Within the deadline readRequest() set: the whole request must arrive in
   /// one idle timeout.
   void readBody() {
-    http::async_read(socket_, buffer_, *parser_, beast::bind_front_handler(&HttpSession::onBody, shared_from_this()));
+    http::async_read(stream_, buffer_, *parser_, beast::bind_front_handler(&HttpSession::onBody, shared_from_this()));
   }
 
   void onBody(beast::error_code ec, size_t /*bytes*/) {
@@ -236,7 +256,7 @@ class HttpSession final : public Session, public std::enable_shared_from_this<Ht
     // anything else would make the client fail the handshake.
     if (!offersSubprotocol(request, accept.subprotocol)) accept.subprotocol.clear();
     idle_timer_.cancel();  // the WebSocket stream runs its own timeouts
-    startWebSocketSession(std::move(socket_), std::move(count_), peer_, state_, std::move(accept), std::move(request));
+    startWebSocketSession(std::move(stream_), std::move(count_), peer_, state_, std::move(accept), std::move(request));
   }
 
   /// Sends an error response after which the request stream cannot be
@@ -250,7 +270,7 @@ class HttpSession final : public Session, public std::enable_shared_from_this<Ht
   void write(Response response) {
     response_ = std::move(response);
     deadline_ = Clock::now() + state_->options.idle_timeout;
-    http::async_write(socket_, response_, beast::bind_front_handler(&HttpSession::onWrite, shared_from_this()));
+    http::async_write(stream_, response_, beast::bind_front_handler(&HttpSession::onWrite, shared_from_this()));
   }
 
   void onWrite(beast::error_code ec, size_t /*bytes*/) {
@@ -264,10 +284,11 @@ class HttpSession final : public Session, public std::enable_shared_from_this<Ht
   /// After an error answer to a request not read to its end: FIN, then
   /// whatever the client still sends is dropped for at most kLingerTime.
   /// Closing with unread bytes would reset the connection, and a client
-  /// still sending a body over the limit could lose the answer.
+  /// still sending a body over the limit could lose the answer. Over TLS the
+  /// drained bytes are records left undecrypted.
   void linger() {
     beast::error_code ignored;
-    socket_.shutdown(asio::ip::tcp::socket::shutdown_send, ignored);
+    socket().shutdown(asio::ip::tcp::socket::shutdown_send, ignored);
     deadline_ = Clock::now() + kLingerTime;
     armIdleTimer(deadline_);
     drain();
@@ -275,29 +296,32 @@ class HttpSession final : public Session, public std::enable_shared_from_this<Ht
 
   void drain() {
     buffer_.clear();
-    socket_.async_read_some(buffer_.prepare(kDrainChunk), [self = shared_from_this()](beast::error_code ec, size_t) {
+    socket().async_read_some(buffer_.prepare(kDrainChunk), [self = shared_from_this()](beast::error_code ec, size_t) {
       if (ec) return self->closeSocket();  // the client closed too, or the deadline passed
       self->drain();
     });
   }
 
   /// Sends FIN; the socket closes when the session, now without pending
-  /// operations, is destroyed.
+  /// operations, is destroyed. TLS sends no close_notify first: every
+  /// response is framed by its Content-Length or chunks, so a client cannot
+  /// take a truncated one for whole, and waiting for the peer's close_notify
+  /// would hold the connection.
   void closeConnection() {
     beast::error_code ignored;
-    socket_.shutdown(asio::ip::tcp::socket::shutdown_send, ignored);
+    socket().shutdown(asio::ip::tcp::socket::shutdown_send, ignored);
     idle_timer_.cancel();
   }
 
   void closeSocket() {
     beast::error_code ignored;
-    socket_.close(ignored);
+    socket().close(ignored);
     idle_timer_.cancel();
   }
 
   std::shared_ptr<ServerState> state_;
   ConnectionCount count_;
-  asio::ip::tcp::socket socket_;
+  Stream stream_;
   asio::steady_timer idle_timer_;
   Clock::time_point deadline_;  ///< when the current read or write must have completed
   Peer peer_;
@@ -311,8 +335,12 @@ class HttpSession final : public Session, public std::enable_shared_from_this<Ht
 
 }  // namespace
 
-void startHttpSession(asio::ip::tcp::socket socket, std::shared_ptr<ServerState> state) {
-  std::make_shared<HttpSession>(std::move(socket), std::move(state))->start();
+void startHttpSession(PlainStream stream, std::shared_ptr<ServerState> state) {
+  std::make_shared<HttpSession<PlainStream>>(std::move(stream), std::move(state))->start();
+}
+
+void startHttpSession(TlsStream stream, std::shared_ptr<ServerState> state) {
+  std::make_shared<HttpSession<TlsStream>>(std::move(stream), std::move(state))->start();
 }
 
 }  // namespace rmap::net

@@ -3,6 +3,7 @@
 #include <boost/asio/io_context.hpp>
 #include <boost/asio/ip/tcp.hpp>
 #include <boost/asio/post.hpp>
+#include <boost/asio/ssl/context.hpp>
 #include <boost/asio/steady_timer.hpp>
 #include <boost/asio/strand.hpp>
 #include <algorithm>
@@ -93,7 +94,11 @@ struct Server::Impl {
       // 40 ms on Linux. Failure only costs latency.
       error_code ignored;
       socket.set_option(tcp::no_delay(true), ignored);
-      startHttpSession(std::move(socket), state);
+      if (state->options.tls) {
+        startHttpSession(TlsStream(std::move(socket), *state->options.tls), state);
+      } else {
+        startHttpSession(std::move(socket), state);
+      }
     }  // else the socket closes right here
     accept();
   }

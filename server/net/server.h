@@ -4,7 +4,10 @@
 /// I/O threads (Boost.Beast on Asio). Requests are parsed with bounded header
 /// and body sizes; malformed or oversize requests (ambiguous body framing and
 /// WebSocket handshakes that cannot succeed included) get a JSON error
-/// response (see json_error.h) without reaching the Service.
+/// response (see json_error.h) without reaching the Service. With a TLS
+/// context every connection is TLS (https://, wss://): a client that does not
+/// complete the TLS handshake within the idle timeout, plain HTTP included,
+/// is disconnected without an answer.
 
 #include <chrono>
 #include <cstdint>
@@ -12,6 +15,10 @@
 #include <string>
 
 #include "net/service.h"
+
+namespace boost::asio::ssl {
+class context;
+}
 
 namespace rmap::net {
 
@@ -32,6 +39,9 @@ struct ServerOptions {
   /// stop() gives each open WebSocket this long to answer its close frame
   /// (1001, going away) before its socket is closed.
   std::chrono::milliseconds close_timeout{1000};
+  /// Null: plain TCP. Otherwise the port speaks only TLS with this context
+  /// (see tls_context.h); shared by every connection, not modified after start().
+  std::shared_ptr<boost::asio::ssl::context> tls;
 };
 
 class Server {

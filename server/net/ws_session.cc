@@ -7,6 +7,8 @@
 #include <boost/beast/core/bind_handler.hpp>
 #include <boost/beast/core/buffers_to_string.hpp>
 #include <boost/beast/core/flat_buffer.hpp>
+#include <boost/beast/core/stream_traits.hpp>
+#include <boost/beast/websocket/ssl.hpp>
 #include <boost/beast/websocket/stream.hpp>
 #include <optional>
 
@@ -27,13 +29,16 @@ constexpr uint16_t kInternalError = 1011;
 /// allocator instead of being kept for the connection's lifetime.
 constexpr size_t kKeptReadBufferBytes = 64u << 10;
 
-class WsSession final : public Session, public WsDriver, public std::enable_shared_from_this<WsSession> {
+template <class Stream>
+class WsSession final : public Session, public WsDriver, public std::enable_shared_from_this<WsSession<Stream>> {
+  using std::enable_shared_from_this<WsSession>::shared_from_this;
+  using std::enable_shared_from_this<WsSession>::weak_from_this;
+
  public:
-  WsSession(asio::ip::tcp::socket socket, ConnectionCount count, Peer peer, std::shared_ptr<ServerState> state,
-            WsAccept& accept)
+  WsSession(Stream stream, ConnectionCount count, Peer peer, std::shared_ptr<ServerState> state, WsAccept& accept)
       : state_(std::move(state)),
         count_(std::move(count)),
-        ws_(std::move(socket)),
+        ws_(std::move(stream)),
         peer_(std::move(peer)),
         handler_(std::move(accept.handler)),
         max_send_queue_bytes_(accept.max_send_queue_bytes),
@@ -156,7 +161,7 @@ class WsSession final : public Session, public WsDriver, public std::enable_shar
   void onWatchTick() {
     if (finished_ || closing_ || !watching_) return;
     beast::error_code ec;
-    const size_t waiting = ws_.next_layer().available(ec);
+    const size_t waiting = beast::get_lowest_layer(ws_).available(ec);
     if (ec) return finish();
     silent_ticks_ = waiting > 0 ? 0 : silent_ticks_ + 1;
     if (silent_ticks_ >= 2) return finish();  // as Beast's timeout: the socket closes, no close frame
@@ -237,7 +242,7 @@ class WsSession final : public Session, public WsDriver, public std::enable_shar
     pause_timer_.cancel();
     close_timer_.cancel();
     beast::error_code ignored;
-    ws_.next_layer().close(ignored);
+    beast::get_lowest_layer(ws_).close(ignored);
     if (!opened_) return;
     --state_->web_sockets;
     try {
@@ -250,7 +255,7 @@ class WsSession final : public Session, public WsDriver, public std::enable_shar
 
   std::shared_ptr<ServerState> state_;
   ConnectionCount count_;
-  websocket::stream<asio::ip::tcp::socket> ws_;
+  websocket::stream<Stream> ws_;
   const Peer peer_;
   std::shared_ptr<WsHandler> handler_;
   const size_t max_send_queue_bytes_;
@@ -273,12 +278,25 @@ class WsSession final : public Session, public WsDriver, public std::enable_shar
   std::optional<ServerState::Handle> handle_;
 };
 
+template <class Stream>
+void startSession(Stream stream, ConnectionCount count, Peer peer, std::shared_ptr<ServerState> state,
+                  WsAccept accept, Request upgrade) {
+  std::make_shared<WsSession<Stream>>(std::move(stream), std::move(count), std::move(peer), std::move(state), accept)
+      ->start(std::move(upgrade));
+}
+
 }  // namespace
 
-void startWebSocketSession(asio::ip::tcp::socket socket, ConnectionCount count, Peer peer,
-                           std::shared_ptr<ServerState> state, WsAccept accept, Request upgrade) {
-  std::make_shared<WsSession>(std::move(socket), std::move(count), std::move(peer), std::move(state), accept)
-      ->start(std::move(upgrade));
+void startWebSocketSession(PlainStream stream, ConnectionCount count, Peer peer, std::shared_ptr<ServerState> state,
+                           WsAccept accept, Request upgrade) {
+  startSession(std::move(stream), std::move(count), std::move(peer), std::move(state), std::move(accept),
+               std::move(upgrade));
+}
+
+void startWebSocketSession(TlsStream stream, ConnectionCount count, Peer peer, std::shared_ptr<ServerState> state,
+                           WsAccept accept, Request upgrade) {
+  startSession(std::move(stream), std::move(count), std::move(peer), std::move(state), std::move(accept),
+               std::move(upgrade));
 }
 
 }  // namespace rmap::net

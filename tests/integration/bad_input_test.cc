@@ -2,11 +2,19 @@
 // and leaves the server serving.
 #include <gtest/gtest.h>
 
+#include <arpa/inet.h>
+#include <ifaddrs.h>
+#include <netinet/in.h>
+
 #include <cmath>
 #include <condition_variable>
 #include <deque>
+#include <functional>
 #include <limits>
+#include <map>
 #include <mutex>
+#include <optional>
+#include <utility>
 
 #include "api_helpers.h"
 #include "client/robot_client.h"
@@ -16,7 +24,11 @@
 namespace rmap::testing {
 namespace {
 
-const std::string kConfig = std::string(kRoleTokensYaml) + "limits:\n  max_frame_bytes: 1048576\n";
+// Small limits, so that crossing each one is quick; one extra browser Origin.
+const std::string kConfig = std::string(kRoleTokensYaml) +
+                            "  allowed_origins: [\"https://viewer.example\"]\n"
+                            "limits:\n  max_frame_bytes: 1048576\n  max_body_bytes: 1048576\n"
+                            "  max_batch_points: 1000\n  max_points_per_cloud: 20000\n";
 
 class BadInput : public ::testing::Test {
  protected:
@@ -64,6 +76,17 @@ class BadInput : public ::testing::Test {
     const v1::Error e = errors_.front();
     errors_.pop_front();
     return e;
+  }
+
+  /// A WebSocket upgrade of `path` as a browser sends it (plus `headers`);
+  /// the HTTP answer: 101, or the refusal.
+  client::HttpResponse upgrade(const std::string& path, std::map<std::string, std::string> headers) {
+    headers.insert({{"Connection", "Upgrade"},
+                    {"Upgrade", "websocket"},
+                    {"Sec-WebSocket-Version", "13"},
+                    {"Sec-WebSocket-Key", "dGhlIHNhbXBsZSBub25jZQ=="}});
+    client::HttpClient http(rmapd_->httpUrl());
+    return http.get(path, headers);
   }
 
   void expectServing() {
@@ -163,6 +186,182 @@ TEST_F(BadInput, TokensAreChecked) {
   client::HttpClient admin(rmapd_->httpUrl(), "admin-token-1");
   EXPECT_EQ(admin.get("/metrics").status, 200);
   expectServing();
+}
+
+/// The code and message of a JSON error body.
+using ErrorText = std::pair<std::string, std::string>;
+
+ErrorText errorOf(const client::HttpResponse& response) {
+  const nlohmann::json body = nlohmann::json::parse(response.body, nullptr, false);
+  if (!body.is_object() || !body.contains("error")) return {"(not a JSON error)", response.body};
+  return {body["error"]["code"].get<std::string>(), body["error"]["message"].get<std::string>()};
+}
+
+std::string connectError(const std::function<void()>& connect) {
+  try {
+    connect();
+  } catch (const client::ClientError& e) {
+    return e.what();
+  }
+  ADD_FAILURE() << "the connection was accepted";
+  return {};
+}
+
+TEST_F(BadInput, ARobotTokenCannotStreamAsAnotherRobotNorUseAdminEndpoints) {
+  const std::string refused = connectError([&] { connect("robot-token-1", "bot-2"); });
+  EXPECT_NE(refused.find("server error permission_denied: this token may only stream as robot 'bot-1'"),
+            std::string::npos)
+      << refused;
+  client::HttpClient admin(rmapd_->httpUrl(), "admin-token-1");
+  EXPECT_EQ(errorOf(admin.get("/v1/robots/bot-2")).first, "robot_not_found") << "the refused Hello was recorded";
+
+  client::HttpClient robot(rmapd_->httpUrl(), "robot-token-1");
+  const client::HttpResponse metrics = robot.get("/metrics");
+  EXPECT_EQ(metrics.status, 403);
+  EXPECT_EQ(errorOf(metrics), ErrorText("permission_denied", "metrics need an admin token"));
+  const client::HttpResponse import = robot.post("/v1/maps/guarded:import?replace=true", "# Octomap OcTree binary file\n",
+                                                 "application/octet-stream");
+  EXPECT_EQ(import.status, 403);
+  EXPECT_EQ(errorOf(import),
+            ErrorText("permission_denied", "importing a map needs an admin token"));
+  expectServing();
+}
+
+TEST_F(BadInput, AViewerTokenIsReadOnly) {
+  const std::string refused = connectError([&] { connect("viewer-token-1"); });
+  EXPECT_NE(refused.find("upgrade refused: HTTP 403"), std::string::npos) << refused;
+  EXPECT_NE(refused.find("a viewer token cannot stream robot data"), std::string::npos) << refused;
+  client::HttpClient viewer(rmapd_->httpUrl(), "viewer-token-1");
+  const client::HttpResponse import = viewer.post("/v1/maps/guarded:import?replace=true", "# Octomap OcTree binary file\n",
+                                                  "application/octet-stream");
+  EXPECT_EQ(import.status, 403);
+  EXPECT_EQ(errorOf(import).first, "permission_denied");
+  EXPECT_EQ(errorOf(viewer.get("/metrics")).first, "permission_denied");
+  // What a viewer may do: read, including batch queries (a POST that changes nothing).
+  EXPECT_EQ(batchQuery(viewer, "guarded", {Eigen::Vector3d(0.0, 0.0, 0.0)}).states_size(), 1);
+  expectServing();
+}
+
+TEST_F(BadInput, StreamsNeedAValidToken) {
+  const std::string anonymous = connectError([&] { connect(""); });
+  EXPECT_NE(anonymous.find("HTTP 401"), std::string::npos) << anonymous;
+  EXPECT_NE(anonymous.find("a bearer token is required"), std::string::npos) << anonymous;
+  const client::HttpResponse none = upgrade("/v1/stream/viewer", {});
+  EXPECT_EQ(none.status, 401);
+  EXPECT_EQ(errorOf(none), ErrorText("unauthenticated", "a bearer token is required"));
+  const client::HttpResponse basic = upgrade("/v1/stream/viewer", {{"Authorization", "Basic dmlld2VyOnRva2Vu"}});
+  EXPECT_EQ(basic.status, 401);
+  EXPECT_EQ(errorOf(basic).second, "Authorization must be 'Bearer <token>'");
+  const client::HttpResponse wrong = upgrade("/v1/stream/viewer", {{"Sec-WebSocket-Protocol", "rmap.v1, bearer.guessed-token"}});
+  EXPECT_EQ(wrong.status, 401);
+  EXPECT_EQ(errorOf(wrong).second, "the token is not valid");
+  // A browser's token rides in the subprotocol offer; the answer names rmap.v1 only.
+  const client::HttpResponse browser =
+      upgrade("/v1/stream/viewer", {{"Sec-WebSocket-Protocol", "rmap.v1, bearer.viewer-token-1"}});
+  EXPECT_EQ(browser.status, 101);
+  EXPECT_EQ(browser.header("sec-websocket-protocol"), "rmap.v1");
+  expectServing();
+}
+
+TEST_F(BadInput, AForeignOriginCannotOpenStreams) {
+  const std::string own = "http://127.0.0.1:" + std::to_string(rmapd_->port());
+  for (const char* path : {"/v1/stream/viewer", "/v1/stream/robot"}) {
+    // Even an admin token: a page from another site must not drive the user's credentials.
+    const client::HttpResponse foreign =
+        upgrade(path, {{"Origin", "https://evil.example"}, {"Authorization", "Bearer admin-token-1"}});
+    EXPECT_EQ(foreign.status, 403) << path;
+    EXPECT_EQ(errorOf(foreign), ErrorText(
+                                    "origin_not_allowed", "this Origin may not open streams on this server"))
+        << path;
+  }
+  // A lookalike of the server's own origin is foreign too.
+  EXPECT_EQ(upgrade("/v1/stream/viewer", {{"Origin", own + ".evil.example"}, {"Authorization", "Bearer viewer-token-1"}})
+                .status,
+            403);
+  EXPECT_EQ(upgrade("/v1/stream/viewer", {{"Origin", own}, {"Authorization", "Bearer viewer-token-1"}}).status, 101);
+  EXPECT_EQ(upgrade("/v1/stream/viewer",
+                    {{"Origin", "https://viewer.example"}, {"Authorization", "Bearer viewer-token-1"}})
+                .status,
+            101);
+  expectServing();
+}
+
+TEST_F(BadInput, SizeLimitsHold) {
+  client::HttpClient viewer(rmapd_->httpUrl(), "viewer-token-1");
+  const client::HttpResponse header = viewer.get("/v1/maps", {{"X-Padding", std::string(17u << 10, 'x')}});
+  EXPECT_EQ(header.status, 431);
+  EXPECT_EQ(errorOf(header), ErrorText("header_too_large", "request header exceeds 16384 bytes"));
+
+  client::HttpClient body_client(rmapd_->httpUrl(), "viewer-token-1");
+  const client::HttpResponse body =
+      body_client.post("/v1/maps/guarded/occupancy:batch", std::string((1u << 20) + 1, '\0'), "application/x-protobuf");
+  EXPECT_EQ(body.status, 413);
+  EXPECT_EQ(errorOf(body),
+            ErrorText("payload_too_large", "request body exceeds 1048576 bytes"));
+
+  const client::HttpResponse batch = [&] {
+    v1::OccupancyBatchRequest request;
+    for (int i = 0; i < 3 * 1001; ++i) request.add_xyz_m(0.0);
+    return viewer.post("/v1/maps/guarded/occupancy:batch", request.SerializeAsString(), "application/x-protobuf");
+  }();
+  EXPECT_EQ(batch.status, 413);
+  EXPECT_EQ(errorOf(batch), ErrorText("too_many_points", "at most 1000 points per batch"));
+
+  auto robot = connect("robot-token-1");
+  v1::RobotMessage huge = good_;
+  huge.set_seq(robot->lastSentSeq() + 1);
+  v1::PointCloud& cloud = *huge.mutable_cloud();
+  cloud.clear_intensities();
+  const int sent_values = cloud.xyz_m_size();  // a multiple of 3: the copies stay whole points
+  while (cloud.xyz_m_size() < 3 * 20001) cloud.add_xyz_m(cloud.xyz_m(cloud.xyz_m_size() % sent_values));
+  const v1::Error e = expectRefused(*robot, huge.SerializeAsString());
+  EXPECT_EQ(e.code(), "invalid_message");
+  EXPECT_NE(e.message().find("more than the limit of 20000"), std::string::npos) << e.message();
+  EXPECT_EQ(e.seq(), huge.seq());
+  expectServing();
+}
+
+/// The first IPv4 address of this host that is not loopback, if any.
+std::optional<std::string> nonLoopbackAddress() {
+  ifaddrs* list = nullptr;
+  if (getifaddrs(&list) != 0) return std::nullopt;
+  std::optional<std::string> found;
+  for (const ifaddrs* a = list; a && !found; a = a->ifa_next) {
+    if (!a->ifa_addr || a->ifa_addr->sa_family != AF_INET) continue;
+    const in_addr address = reinterpret_cast<const sockaddr_in*>(a->ifa_addr)->sin_addr;
+    if ((ntohl(address.s_addr) >> 24) == 127) continue;
+    char text[INET_ADDRSTRLEN];
+    if (inet_ntop(AF_INET, &address, text, sizeof text)) found = text;
+  }
+  freeifaddrs(list);
+  return found;
+}
+
+TEST(LoopbackOnly, WithoutTokensOnlyLoopbackPeersAreServed) {
+  const std::optional<std::string> address = nonLoopbackAddress();
+  if (!address) GTEST_SKIP() << "this host has no non-loopback IPv4 address to connect from";
+  TempDir dir("rmap-loopback");
+  RmapdProcess rmapd(dir.path() / "data", {}, std::chrono::seconds(60), {"--listen", "0.0.0.0:0"});
+  const std::string remote = *address + ":" + std::to_string(rmapd.port());
+  client::HttpClient lan("http://" + remote, "admin-token-1");  // no token is valid in this mode
+  const client::HttpResponse maps = lan.get("/v1/maps");
+  EXPECT_EQ(maps.status, 403);
+  EXPECT_EQ(errorOf(maps), ErrorText(
+                               "loopback_only", "no tokens are configured, so only loopback clients are served"));
+  EXPECT_EQ(lan.get("/healthz").status, 200);  // unauthenticated everywhere
+
+  client::RobotClientOptions options;
+  options.server_url = "ws://" + remote;
+  options.hello.set_robot_id("lan-bot");
+  options.hello.set_map("lan");
+  client::RobotClient robot(options);
+  const std::string refused = connectError([&] { robot.connect(); });
+  EXPECT_NE(refused.find("HTTP 403"), std::string::npos) << refused;
+  EXPECT_NE(refused.find("loopback_only"), std::string::npos) << refused;
+
+  client::HttpClient local(rmapd.httpUrl());
+  EXPECT_EQ(getJson(local, "/v1/maps")["maps"].size(), 0u) << "the refused robot created its map";
+  EXPECT_EQ(local.get("/metrics").status, 200);  // loopback peers are admin
 }
 
 TEST_F(BadInput, BadHttpParametersGetJsonErrors) {

@@ -6,6 +6,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <fstream>
 #include <random>
@@ -34,7 +35,10 @@ RmapdProcess::RmapdProcess(const fs::path& data_dir, const std::string& config_y
                            std::chrono::seconds startup_timeout, const std::vector<std::string>& extra_args) {
   const fs::path base = data_dir.parent_path();
   log_path_ = base / (data_dir.filename().string() + "-rmapd.log");
-  std::vector<std::string> args{RMAPD_PATH, "--listen", "127.0.0.1:0", "--data-dir", data_dir.string()};
+  std::vector<std::string> args{RMAPD_PATH, "--data-dir", data_dir.string()};
+  if (std::find(extra_args.begin(), extra_args.end(), "--listen") == extra_args.end()) {
+    args.insert(args.end(), {"--listen", "127.0.0.1:0"});
+  }
   if (!config_yaml.empty()) {
     const fs::path config = base / (data_dir.filename().string() + "-config.yaml");
     std::ofstream(config) << config_yaml;

@@ -29,7 +29,8 @@ class RmapdProcess {
  public:
   /// Starts rmapd with `--listen 127.0.0.1:0 --data-dir data_dir` plus the
   /// config file (written from `config_yaml` beside the data dir when not
-  /// empty) and `extra_args`, and waits until it listens.
+  /// empty) and `extra_args` (a `--listen` there replaces the default one),
+  /// and waits until it listens.
   /// @throws std::runtime_error with rmapd's log when it does not come up in time
   RmapdProcess(const std::filesystem::path& data_dir, const std::string& config_yaml = {},
                std::chrono::seconds startup_timeout = std::chrono::seconds(60),

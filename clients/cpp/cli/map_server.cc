@@ -11,7 +11,8 @@
 namespace rmap::cli {
 
 void MapServerOptions::addTo(CLI::App& command) {
-  command.add_option("--server", server_url, "rmapd's HTTP address, http://HOST:PORT")->required();
+  command.add_option("--server", server_url, "rmapd's HTTP address, http://HOST:PORT or https://HOST:PORT")
+      ->required();
   command.add_option("--map", map, "map name: 1..64 characters of [A-Za-z0-9._-]")
       ->required()
       ->check(CLI::Validator(
@@ -24,6 +25,8 @@ void MapServerOptions::addTo(CLI::App& command) {
           },
           "NAME"));
   command.add_option("--token", token, "bearer token (none in rmapd's loopback-only mode)")->envname("RMAP_TOKEN");
+  command.add_option("--ca-file", ca_file, "https://: PEM CA certificates rmapd's certificate must chain to "
+                     "(default: the system's trust store)");
   command.add_option("--timeout-s", timeout_s, "seconds to wait for each answer of the server")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
@@ -31,7 +34,7 @@ void MapServerOptions::addTo(CLI::App& command) {
 
 std::unique_ptr<client::HttpClient> MapServerOptions::connect() const {
   return std::make_unique<client::HttpClient>(
-      server_url, token, std::chrono::milliseconds(static_cast<int64_t>(timeout_s * 1000.0)));
+      server_url, token, std::chrono::milliseconds(static_cast<int64_t>(timeout_s * 1000.0)), ca_file);
 }
 
 std::string MapServerOptions::mapPath(const std::string& suffix) const { return "/v1/maps/" + map + suffix; }

@@ -23,11 +23,12 @@ class CommandError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-/// --server, --map, --token and --timeout-s of a map command.
+/// --server, --map, --token, --ca-file and --timeout-s of a map command.
 struct MapServerOptions {
-  std::string server_url;  ///< http://HOST:PORT
+  std::string server_url;  ///< http://HOST:PORT or https://HOST:PORT
   std::string map;
   std::string token;  ///< bearer token; empty in loopback-only mode
+  std::string ca_file;  ///< https://: PEM CA certificates to verify rmapd against; empty = the system's
   double timeout_s = 30.0;
 
   /// Adds the options to `command`; `timeout_s` is the default kept.

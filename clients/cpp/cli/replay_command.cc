@@ -17,6 +17,7 @@ void addReplayCommand(CLI::App& app, int& exit_code) {
     std::string map;
     std::string robot;
     std::string token;
+    std::string ca_file;
     std::string format = "auto";
     std::string rate = "max";
     std::string json_out;
@@ -32,10 +33,13 @@ void addReplayCommand(CLI::App& app, int& exit_code) {
   CLI::App* replay = app.add_subcommand(
       "replay", "stream datasets to a server as one robot: CARMEN logs, OctoMap .graph, scan.dat text clouds, "
                 "velodyne .bin, PLY/PCD clouds, 3DTK folders, image folders");
-  replay->add_option("--server", args->server, "robot stream endpoint ws://HOST:PORT")->capture_default_str();
+  replay->add_option("--server", args->server, "robot stream endpoint ws://HOST:PORT or wss://HOST:PORT")
+      ->capture_default_str();
   replay->add_option("--map", args->map, "map to write to (created on first use)")->required();
   replay->add_option("--robot", args->robot, "robot id (default: the first file's name without extensions)");
   replay->add_option("--token", args->token, "bearer token of a robot or admin role");
+  replay->add_option("--ca-file", args->ca_file, "wss://: PEM CA certificates rmapd's certificate must chain to "
+                     "(default: the system's trust store)");
   std::vector<std::string> formats{"auto"};
   formats.insert(formats.end(), replayFormatNames().begin(), replayFormatNames().end());
   replay->add_option("--format", args->format, "the files' format (auto: by extension or folder content)")
@@ -82,6 +86,7 @@ void addReplayCommand(CLI::App& app, int& exit_code) {
     ReplayOptions options;
     options.server_url = args->server;
     options.token = args->token;
+    options.ca_file = args->ca_file;
     options.map = args->map;
     options.robot_id = args->robot.empty() ? defaultRobotId(args->files.front()) : args->robot;
     options.resolution_m = args->resolution_m;

@@ -79,6 +79,7 @@ ReplaySummary runReplay(const ReplaySource& source, const ReplayOptions& options
   client::RobotClientOptions client_options;
   client_options.server_url = options.server_url;
   client_options.token = options.token;
+  client_options.ca_file = options.ca_file;
   client_options.max_in_flight = options.max_in_flight;
   client_options.timeout = options.timeout;
   client_options.hello.set_robot_id(options.robot_id);

@@ -21,8 +21,9 @@ enum class ReplayRate {
 };
 
 struct ReplayOptions {
-  std::string server_url;      ///< ws://host:port
+  std::string server_url;      ///< ws://host:port or wss://host:port
   std::string token;           ///< Bearer token, or empty
+  std::string ca_file;         ///< wss://: PEM CA certificates to verify the server against (see RobotClientOptions)
   std::string map;
   std::string robot_id;
   double resolution_m = 0.0;   ///< for a new map; 0: the server's default

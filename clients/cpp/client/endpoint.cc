@@ -1,4 +1,4 @@
-// Endpoint::parse: the one URL shape the clients accept.
+// Endpoint::parse: the URL shapes the clients accept.
 
 #include <algorithm>
 #include <cctype>
@@ -22,10 +22,13 @@ Endpoint Endpoint::parse(const std::string& url) {
     throw bad("contains whitespace or control characters");
   }
   const size_t scheme_end = url.find("://");
-  if (scheme_end == std::string::npos) throw bad("expected ws://host:port[/path] or http://host:port[/path]");
+  if (scheme_end == std::string::npos) {
+    throw bad("expected ws[s]://host:port[/path] or http[s]://host:port[/path]");
+  }
   const std::string scheme = lower(url.substr(0, scheme_end));
-  if (scheme == "wss" || scheme == "https") throw bad(scheme + " (TLS) is not supported yet");
-  if (scheme != "ws" && scheme != "http") throw bad("unknown scheme '" + scheme + "'");
+  if (scheme != "ws" && scheme != "http" && scheme != "wss" && scheme != "https") {
+    throw bad("unknown scheme '" + scheme + "'");
+  }
 
   const size_t authority_begin = scheme_end + 3;
   const size_t path_begin = std::min(url.find_first_of("/?#", authority_begin), url.size());
@@ -33,6 +36,7 @@ Endpoint Endpoint::parse(const std::string& url) {
   if (authority.find('@') != std::string::npos) throw bad("user info is not supported");
 
   Endpoint e;
+  e.tls = scheme == "wss" || scheme == "https";
   std::string port;
   if (!authority.empty() && authority.front() == '[') {  // [IPv6 literal]
     const size_t close = authority.find(']');
@@ -53,8 +57,8 @@ Endpoint Endpoint::parse(const std::string& url) {
     }
   }
   if (e.host.empty()) throw bad("missing host");
-  // Without a port the scheme's default applies (both schemes here are port 80).
-  if (port.empty()) port = "80";
+  // Without a port the scheme's default applies.
+  if (port.empty()) port = e.tls ? "443" : "80";
   unsigned value = 0;
   const auto [end, ec] = std::from_chars(port.data(), port.data() + port.size(), value);
   if (ec != std::errc() || end != port.data() + port.size() || value == 0 || value > 65535) {

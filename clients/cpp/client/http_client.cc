@@ -1,4 +1,4 @@
-// HttpClient: blocking HTTP/1.1 on one keep-alive connection.
+// HttpClient: blocking HTTP/1.1 on one keep-alive connection, plain or TLS.
 //
 // The calls are asynchronous Beast operations run on the caller's thread with
 // io_context::run_until(deadline): that is what gives every request a timeout
@@ -13,8 +13,10 @@
 #include <boost/beast/http.hpp>
 #include <cctype>
 #include <limits>
+#include <optional>
 
 #include "client/robot_client.h"
+#include "client/tls_client.h"
 
 namespace rmap::client {
 namespace {
@@ -32,10 +34,11 @@ std::string lower(beast::string_view s) {
 }
 
 /// Errors meaning the server closed a kept-alive connection before reading the
-/// request: the request can be sent again on a new connection.
+/// request: the request can be sent again on a new connection. (rmapd ends
+/// TLS connections without close_notify: stream_truncated.)
 bool staleConnection(const beast::error_code& ec) {
   return ec == http::error::end_of_stream || ec == asio::error::eof || ec == asio::error::connection_reset ||
-         ec == asio::error::broken_pipe;
+         ec == asio::error::broken_pipe || ec == asio::ssl::error::stream_truncated;
 }
 
 }  // namespace
@@ -46,26 +49,52 @@ std::string HttpResponse::header(const std::string& lower_name) const {
 }
 
 struct HttpClient::Impl {
-  Impl(const std::string& base_url, std::string bearer, std::chrono::milliseconds limit)
+  Impl(const std::string& base_url, std::string bearer, std::chrono::milliseconds limit, const std::string& ca_file)
       : endpoint(Endpoint::parse(base_url)), token(std::move(bearer)), timeout(limit) {
     host_header = endpoint.host.find(':') != std::string::npos ? "[" + endpoint.host + "]" : endpoint.host;
     host_header += ":" + endpoint.port;
+    if (endpoint.tls) tls = makeClientTlsContext(ca_file);
+    newStream();
   }
 
   Endpoint endpoint;
   std::string token;
   std::chrono::milliseconds timeout;
   std::string host_header;
+  std::shared_ptr<asio::ssl::context> tls;  ///< https:// only
   asio::io_context ioc;
   tcp::resolver resolver{ioc};
-  beast::tcp_stream stream{ioc};
+  // Exactly one is set. A TLS session does not survive its connection, so
+  // each connection gets a fresh stream.
+  std::optional<beast::tcp_stream> plain;
+  std::optional<TlsTcpStream> secure;
   beast::flat_buffer buffer;
   bool connected = false;
 
+  void newStream() {
+    if (tls) {
+      secure.emplace(ioc, *tls);
+    } else {
+      plain.emplace(ioc);
+    }
+  }
+
+  beast::tcp_stream& transport() { return secure ? beast::get_lowest_layer(*secure) : *plain; }
+
+  /// Runs `operation` on the stream the scheme uses.
+  template <class Operation>
+  void withStream(Operation&& operation) {
+    if (secure) {
+      operation(*secure);
+    } else {
+      operation(*plain);
+    }
+  }
+
   void disconnect() {
     beast::error_code ignored;
-    stream.socket().shutdown(tcp::socket::shutdown_both, ignored);
-    stream.close();
+    transport().socket().shutdown(tcp::socket::shutdown_both, ignored);
+    transport().close();
     buffer.clear();
     connected = false;
   }
@@ -95,8 +124,9 @@ struct HttpClient::Impl {
                            });
     await(done, deadline, what);
     if (ec) throw ClientError(what + ": resolving " + endpoint.host + ": " + ec.message());
+    newStream();
     done = false;
-    stream.async_connect(results, [&](beast::error_code e, const tcp::endpoint&) {
+    transport().async_connect(results, [&](beast::error_code e, const tcp::endpoint&) {
       ec = e;
       done = true;
     });
@@ -105,7 +135,20 @@ struct HttpClient::Impl {
       disconnect();
       throw ClientError(what + ": connecting to " + host_header + ": " + ec.message());
     }
-    stream.socket().set_option(tcp::no_delay(true), ec);
+    transport().socket().set_option(tcp::no_delay(true), ec);
+    if (secure) {
+      prepareTlsStream(*secure, endpoint.host);
+      done = false;
+      secure->async_handshake(asio::ssl::stream_base::client, [&](beast::error_code e) {
+        ec = e;
+        done = true;
+      });
+      await(done, deadline, what);
+      if (ec) {
+        disconnect();
+        throw ClientError(what + ": TLS handshake with " + host_header + ": " + ec.message());
+      }
+    }
     connected = true;
   }
 
@@ -115,16 +158,20 @@ struct HttpClient::Impl {
                              const std::string& what) {
     bool done = false;
     beast::error_code ec;
-    http::async_write(stream, request, [&](beast::error_code e, size_t) {
-      ec = e;
-      done = true;
+    withStream([&](auto& stream) {
+      http::async_write(stream, request, [&](beast::error_code e, size_t) {
+        ec = e;
+        done = true;
+      });
     });
     await(done, deadline, what);
     if (ec) return ec;
     done = false;
-    http::async_read(stream, buffer, parser, [&](beast::error_code e, size_t) {
-      ec = e;
-      done = true;
+    withStream([&](auto& stream) {
+      http::async_read(stream, buffer, parser, [&](beast::error_code e, size_t) {
+        ec = e;
+        done = true;
+      });
     });
     await(done, deadline, what);
     return ec;
@@ -177,8 +224,9 @@ struct HttpClient::Impl {
   }
 };
 
-HttpClient::HttpClient(const std::string& base_url, std::string token, std::chrono::milliseconds timeout)
-    : impl_(std::make_unique<Impl>(base_url, std::move(token), timeout)) {}
+HttpClient::HttpClient(const std::string& base_url, std::string token, std::chrono::milliseconds timeout,
+                       const std::string& ca_file)
+    : impl_(std::make_unique<Impl>(base_url, std::move(token), timeout, ca_file)) {}
 
 HttpClient::~HttpClient() { impl_->disconnect(); }
 

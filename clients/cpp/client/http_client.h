@@ -1,7 +1,8 @@
 #pragma once
 /// @file http_client.h
 /// A blocking HTTP/1.1 client on one keep-alive connection (reconnects when
-/// the server closed it). For tools, tests and benchmarks.
+/// the server closed it), plain (http://) or TLS (https://). For tools,
+/// tests and benchmarks.
 
 #include <chrono>
 #include <map>
@@ -19,10 +20,14 @@ struct HttpResponse {
 
 class HttpClient {
  public:
-  /// @param base_url  http://host:port
-  /// @throws ClientError for a bad URL
+  /// @param base_url  http://host:port or https://host:port
+  /// @param ca_file   https:// only: PEM CA certificates the server's certificate
+  ///                  must chain to (empty: the system's trust store); it must
+  ///                  also name the URL's host
+  /// @throws ClientError for a bad URL or an unreadable CA file
   explicit HttpClient(const std::string& base_url, std::string token = {},
-                      std::chrono::milliseconds timeout = std::chrono::milliseconds(10000));
+                      std::chrono::milliseconds timeout = std::chrono::milliseconds(10000),
+                      const std::string& ca_file = {});
   ~HttpClient();
   HttpClient(const HttpClient&) = delete;
   HttpClient& operator=(const HttpClient&) = delete;

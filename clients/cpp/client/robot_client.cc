@@ -1,4 +1,4 @@
-// RobotClient: the robot stream over Beast WebSocket.
+// RobotClient: the robot stream over Beast WebSocket, plain (ws://) or TLS (wss://).
 //
 // Every operation on the socket runs on one I/O thread (asynchronous Beast
 // calls): a Beast stream must not be used by two threads at once, and its
@@ -17,9 +17,12 @@
 #include <boost/beast/core.hpp>
 #include <boost/beast/websocket.hpp>
 #include <deque>
+#include <optional>
 #include <thread>
 #include <unordered_map>
 #include <utility>
+
+#include "client/tls_client.h"
 
 namespace rmap::client {
 namespace {
@@ -29,6 +32,8 @@ namespace beast = boost::beast;
 namespace websocket = beast::websocket;
 using tcp = asio::ip::tcp;
 using Clock = std::chrono::steady_clock;
+using PlainWebSocket = websocket::stream<beast::tcp_stream>;
+using TlsWebSocket = websocket::stream<TlsTcpStream>;
 
 constexpr const char* kStreamPath = "/v1/stream/robot";
 
@@ -53,11 +58,13 @@ struct RobotClient::Impl {
     // "/" means "the server's robot stream"; any other path is kept (a proxy prefix).
     target = endpoint.path == "/" ? kStreamPath : endpoint.path;
     options.max_in_flight = std::max<size_t>(1, options.max_in_flight);
+    if (endpoint.tls) tls = makeClientTlsContext(options.ca_file);
   }
 
   RobotClientOptions options;
   Endpoint endpoint;
   std::string target;
+  std::shared_ptr<asio::ssl::context> tls;  ///< wss:// only
   AckCallback ack_callback;
   PoseCallback pose_callback;
   ErrorCallback error_callback;
@@ -65,7 +72,9 @@ struct RobotClient::Impl {
   // ---- I/O thread only (set up by connect() before the thread starts) ----
   asio::io_context ioc;
   std::optional<tcp::resolver> resolver;
-  std::optional<websocket::stream<beast::tcp_stream>> ws;
+  // One of them is set per session, as the scheme says.
+  std::optional<PlainWebSocket> ws;
+  std::optional<TlsWebSocket> wss;
   beast::flat_buffer read_buffer;
   websocket::response_type upgrade_response;
   std::deque<Frame> write_queue;
@@ -94,6 +103,21 @@ struct RobotClient::Impl {
 
   // ---------------------------------------------------------------- I/O side
 
+  /// Runs `operation` on the session's WebSocket stream.
+  template <class Operation>
+  void withWebSocket(Operation&& operation) {
+    if (wss) {
+      operation(*wss);
+    } else {
+      operation(*ws);
+    }
+  }
+
+  beast::tcp_stream* transport() {
+    if (wss) return &beast::get_lowest_layer(*wss);
+    return ws ? &beast::get_lowest_layer(*ws) : nullptr;
+  }
+
   void setStage(std::string what) {
     std::lock_guard lock(mutex);
     stage = std::move(what);
@@ -116,7 +140,7 @@ struct RobotClient::Impl {
   void abort() {
     aborted = true;
     if (resolver) resolver->cancel();
-    if (ws) beast::get_lowest_layer(*ws).close();
+    if (beast::tcp_stream* stream = transport()) stream->close();
   }
 
   void startConnect() {
@@ -126,7 +150,7 @@ struct RobotClient::Impl {
                               if (ec) return fail("resolving " + endpoint.host + ": " + ec.message());
                               if (aborted) return;
                               setStage("connecting");
-                              beast::get_lowest_layer(*ws).async_connect(
+                              transport()->async_connect(
                                   results, [this](beast::error_code ec, const tcp::endpoint&) { onConnected(ec); });
                             });
   }
@@ -134,18 +158,34 @@ struct RobotClient::Impl {
   void onConnected(beast::error_code ec) {
     if (ec) return fail("TCP connect: " + ec.message());
     if (aborted) return;
-    beast::get_lowest_layer(*ws).socket().set_option(tcp::no_delay(true), ec);  // acks are latency-bound
-    ws->set_option(websocket::stream_base::decorator([token = options.token](websocket::request_type& request) {
-      request.set(beast::http::field::user_agent, "rmap-client");
-      if (!token.empty()) request.set(beast::http::field::authorization, "Bearer " + token);
-    }));
-    // No Beast timeouts: its timer would outlive abort() and keep the I/O
-    // thread alive; connect() and close() enforce their own deadlines.
-    ws->auto_fragment(false);
+    transport()->socket().set_option(tcp::no_delay(true), ec);  // acks are latency-bound
+    if (!wss) return upgrade();
+    try {
+      prepareTlsStream(wss->next_layer(), endpoint.host);
+    } catch (const ClientError& e) {
+      return fail(e.what());
+    }
+    setStage("TLS handshake");
+    wss->next_layer().async_handshake(asio::ssl::stream_base::client, [this](beast::error_code ec) {
+      if (ec) return fail("TLS handshake: " + ec.message());
+      if (!aborted) upgrade();
+    });
+  }
+
+  void upgrade() {
     setStage("WebSocket upgrade");
     const std::string host = endpoint.host.find(':') != std::string::npos ? "[" + endpoint.host + "]" : endpoint.host;
-    ws->async_handshake(upgrade_response, host + ":" + endpoint.port, target,
-                        [this](beast::error_code ec) { onHandshake(ec); });
+    withWebSocket([&](auto& stream) {
+      stream.set_option(websocket::stream_base::decorator([token = options.token](websocket::request_type& request) {
+        request.set(beast::http::field::user_agent, "rmap-client");
+        if (!token.empty()) request.set(beast::http::field::authorization, "Bearer " + token);
+      }));
+      // No Beast timeouts: its timer would outlive abort() and keep the I/O
+      // thread alive; connect() and close() enforce their own deadlines.
+      stream.auto_fragment(false);
+      stream.async_handshake(upgrade_response, host + ":" + endpoint.port, target,
+                             [this](beast::error_code ec) { onHandshake(ec); });
+    });
   }
 
   void onHandshake(beast::error_code ec) {
@@ -163,13 +203,18 @@ struct RobotClient::Impl {
   }
 
   void startRead() {
-    ws->async_read(read_buffer, [this](beast::error_code ec, size_t) { onRead(ec); });
+    withWebSocket([&](auto& stream) {
+      stream.async_read(read_buffer, [this](beast::error_code ec, size_t) { onRead(ec); });
+    });
   }
 
   void onRead(beast::error_code ec) {
     if (ec) {
       if (close_requested) return fail("closed by the client");
-      return fail(ec == websocket::error::closed ? describeClose(ws->reason()) : "reading: " + ec.message());
+      if (ec != websocket::error::closed) return fail("reading: " + ec.message());
+      websocket::close_reason reason;
+      withWebSocket([&](auto& stream) { reason = stream.reason(); });
+      return fail(describeClose(reason));
     }
     rmap::v1::ServerMessage message;
     const bool parsed = message.ParseFromArray(read_buffer.data().data(), static_cast<int>(read_buffer.size()));
@@ -248,27 +293,33 @@ struct RobotClient::Impl {
       return;
     }
     writing = true;
-    ws->binary(write_queue.front().binary);
-    ws->async_write(asio::buffer(write_queue.front().bytes), [this](beast::error_code ec, size_t) {
-      write_queue.pop_front();
-      if (ec) {
-        write_queue.clear();
-        writing = false;
-        return fail("writing: " + ec.message());
-      }
-      writeNext();
+    withWebSocket([&](auto& stream) {
+      stream.binary(write_queue.front().binary);
+      stream.async_write(asio::buffer(write_queue.front().bytes), [this](beast::error_code ec, size_t) {
+        write_queue.pop_front();
+        if (ec) {
+          write_queue.clear();
+          writing = false;
+          return fail("writing: " + ec.message());
+        }
+        writeNext();
+      });
     });
   }
 
   /// Normal closure once queued frames are out.
   void requestClose() {
     close_requested = true;
-    if (aborted || !ws || !ws->is_open()) return abort();
+    bool open = false;
+    if (ws || wss) withWebSocket([&](auto& stream) { open = stream.is_open(); });
+    if (aborted || !open) return abort();
     if (!writing) startClose();
   }
 
   void startClose() {
-    ws->async_close(websocket::close_code::normal, [this](beast::error_code) { abort(); });
+    withWebSocket([&](auto& stream) {
+      stream.async_close(websocket::close_code::normal, [this](beast::error_code) { abort(); });
+    });
   }
 
   // ------------------------------------------------------------- caller side
@@ -336,7 +387,13 @@ rmap::v1::Welcome RobotClient::connect() {
 
   // Fresh session: the I/O thread is not running, so its objects are ours here.
   d.resolver.emplace(d.ioc);
-  d.ws.emplace(d.ioc);
+  d.ws.reset();
+  d.wss.reset();
+  if (d.tls) {
+    d.wss.emplace(d.ioc, *d.tls);
+  } else {
+    d.ws.emplace(d.ioc);
+  }
   d.read_buffer.clear();
   d.upgrade_response = websocket::response_type();
   d.write_queue.clear();

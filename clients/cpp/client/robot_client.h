@@ -25,18 +25,24 @@ class ClientError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-/// Parsed ws://host:port[/path] or http://host:port[/path].
+/// Parsed ws[s]://host[:port][/path] or http[s]://host[:port][/path].
 struct Endpoint {
   std::string host;
-  std::string port;
+  std::string port;  ///< 80, or 443 with TLS, when absent
   std::string path;  ///< "/" when absent
-  /// @throws ClientError for anything else (wss/https are not supported yet)
+  bool tls = false;  ///< wss:// or https://
+  /// @throws ClientError for anything else
   static Endpoint parse(const std::string& url);
 };
 
 struct RobotClientOptions {
-  std::string server_url = "ws://127.0.0.1:8080";  ///< the path is /v1/stream/robot
+  /// ws:// or wss:// (TLS); the path is /v1/stream/robot
+  std::string server_url = "ws://127.0.0.1:8080";
   std::string token;                               ///< sent as Authorization: Bearer when set
+  /// wss:// only: PEM CA certificates the server's certificate must chain to;
+  /// empty = the system's trust store. The certificate must also name the
+  /// URL's host (DNS name, or IP address in its subjectAltName).
+  std::string ca_file;
   rmap::v1::Hello hello;                           ///< robot id, map, sensors
   size_t max_in_flight = 64;
   std::chrono::milliseconds timeout{10000};        ///< connect, welcome and send() waits

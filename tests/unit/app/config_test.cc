@@ -271,6 +271,30 @@ TEST(Validate, ABatchOfMaxBatchPointsMustFitInTheBodyLimit) {
   EXPECT_THROW(validate(config), std::invalid_argument);
 }
 
+TEST(LoadConfigFile, ReadsTheTlsFiles) {
+  const YamlFile file("tls:\n  certificate_file: /etc/rmap/cert.pem\n  private_key_file: /etc/rmap/key.pem\n");
+  Config config;
+  EXPECT_FALSE(config.tls.enabled());
+  loadConfigFile(file.path(), config);
+  EXPECT_TRUE(config.tls.enabled());
+  EXPECT_EQ(config.tls.certificate_file, "/etc/rmap/cert.pem");
+  EXPECT_EQ(config.tls.private_key_file, "/etc/rmap/key.pem");
+  EXPECT_NO_THROW(validate(config));  // the files themselves are read when the server starts
+}
+
+TEST(Validate, TlsNeedsBothFiles) {
+  for (const bool with_certificate : {true, false}) {
+    Config config;
+    (with_certificate ? config.tls.certificate_file : config.tls.private_key_file) = "/etc/rmap/file.pem";
+    try {
+      validate(config);
+      ADD_FAILURE() << "half a TLS config was accepted";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_STREQ(e.what(), "tls needs both certificate_file and private_key_file");
+    }
+  }
+}
+
 TEST(RoleToString, NamesEveryRole) {
   EXPECT_STREQ(toString(Role::kRobot), "robot");
   EXPECT_STREQ(toString(Role::kViewer), "viewer");

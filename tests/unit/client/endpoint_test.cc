@@ -44,16 +44,17 @@ TEST(Endpoint, RejectsEverythingElse) {
   }
 }
 
-TEST(Endpoint, SaysTlsIsNotSupported) {
-  for (const std::string url : {"wss://h:443", "https://h"}) {
-    try {
-      Endpoint::parse(url);
-      ADD_FAILURE() << url << " parsed";
-    } catch (const ClientError& e) {
-      EXPECT_NE(std::string(e.what()).find("TLS"), std::string::npos) << e.what();
-      EXPECT_NE(std::string(e.what()).find(url), std::string::npos) << e.what();
-    }
-  }
+TEST(Endpoint, TlsSchemesSetTlsAndDefaultTo443) {
+  const Endpoint wss = Endpoint::parse("WSS://robots.local/v1/stream/robot");
+  EXPECT_TRUE(wss.tls);
+  EXPECT_EQ(wss.host, "robots.local");
+  EXPECT_EQ(wss.port, "443");
+  EXPECT_EQ(wss.path, "/v1/stream/robot");
+  const Endpoint https = Endpoint::parse("https://127.0.0.1:8443");
+  EXPECT_TRUE(https.tls);
+  EXPECT_EQ(https.port, "8443");
+  EXPECT_FALSE(Endpoint::parse("ws://h:1").tls);
+  EXPECT_FALSE(Endpoint::parse("http://h:1").tls);
 }
 
 }  // namespace

@@ -114,7 +114,14 @@ TEST(HttpClient, ConnectionFailuresAndBadUrlsThrow) {
   }
   HttpClient http("http://127.0.0.1:" + std::to_string(port));
   EXPECT_THROW(http.get("/hello"), ClientError);
-  EXPECT_THROW(HttpClient("https://127.0.0.1:1"), ClientError);
+  HttpClient https("https://127.0.0.1:" + std::to_string(port));
+  EXPECT_THROW(https.get("/hello"), ClientError);
+  try {
+    HttpClient("https://127.0.0.1:1", {}, std::chrono::milliseconds(1000), "/nonexistent/ca.pem");
+    ADD_FAILURE() << "a missing CA file was accepted";
+  } catch (const ClientError& e) {
+    EXPECT_NE(std::string(e.what()).find("CA file '/nonexistent/ca.pem'"), std::string::npos) << e.what();
+  }
   EXPECT_THROW(HttpClient("127.0.0.1:80"), ClientError);
 }
 
