@@ -184,7 +184,7 @@ TEST(FaultCycles, Kill9AtRandomMomentsLosesNothingAcknowledgedAndAppliesNothingT
   sim::TrajectoryOptions path;
   path.sensor_height_m = 1.0;
   path.num_poses = 200;
-  path.step_m = 0.2;
+  path.step_m = 0.26;
   client::Laser2dRobotOptions laser;
   laser.mount_height_m = 1.0;
   client::Laser2dRobot walker(world, sim::planTrajectory(world, path, 5), laser, 11);
@@ -207,6 +207,9 @@ TEST(FaultCycles, Kill9AtRandomMomentsLosesNothingAcknowledgedAndAppliesNothingT
     cloud_tracks[r]->message = [r, n = cloud_tracks.size()](uint64_t seq) {
       return columnCloud((seq - 1) * n + r, static_cast<int64_t>(seq) * 100'000'000);
     };
+    // Paced so that sending outlasts the longest delay before the kill.
+    cloud_tracks[r]->max_new_per_cycle = 600;
+    cloud_tracks[r]->pace = std::chrono::milliseconds(2);
   }
   scanner.robot_id = "scan-bot";
   scanner.map = kScanMap;
@@ -241,7 +244,7 @@ TEST(FaultCycles, Kill9AtRandomMomentsLosesNothingAcknowledgedAndAppliesNothingT
     // Ingest, and a kill -9 at a random moment of it.
     std::vector<std::thread> senders;
     for (Track* track : tracks) senders.emplace_back([track] { track->streamUntilKilled(); });
-    const auto delay = std::chrono::milliseconds(50 + rng() % 1000);
+    const auto delay = std::chrono::milliseconds(50 + rng() % 1000);  // the cloud robots send for >= 1.2 s
     std::this_thread::sleep_for(delay);
     rmapd.kill9();
     for (std::thread& s : senders) s.join();
