@@ -22,12 +22,11 @@
 #include <thread>
 
 #include "api_helpers.h"
-#include "client/laser2d_robot.h"
 #include "client/robot_client.h"
 #include "column_clouds.h"
+#include "laser_walker.h"
 #include "rmapd_process.h"
 #include "sim/building.h"
-#include "sim/trajectory.h"
 #include "store_copy.h"
 
 namespace rmap::testing {
@@ -181,13 +180,7 @@ TEST(FaultCycles, Kill9AtRandomMomentsLosesNothingAcknowledgedAndAppliesNothingT
   sim::BuildingOptions building;
   building.max_furniture_per_room = 1;
   const sim::VoxelWorld world = sim::makeBuilding(building, 3);
-  sim::TrajectoryOptions path;
-  path.sensor_height_m = 1.0;
-  path.num_poses = 200;
-  path.step_m = 0.26;
-  client::Laser2dRobotOptions laser;
-  laser.mount_height_m = 1.0;
-  client::Laser2dRobot walker(world, sim::planTrajectory(world, path, 5), laser, 11);
+  client::Laser2dRobot walker = buildingWalker(world, 200);
   std::vector<v1::RobotMessage> scans;
   const auto scan = [&](uint64_t seq) {
     while (scans.size() < seq) {
