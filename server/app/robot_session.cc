@@ -146,7 +146,11 @@ void RobotSession::handleHello(const v1::Hello& hello) {
   } catch (const std::exception& e) {
     robot_id_.clear();
     map_.reset();
-    sendError("unavailable", std::string("cannot open the session: ") + e.what(), 0, true);
+    // A store failure (e.g. a full disk) is named by its cause, without the server's paths.
+    const auto* store_error = dynamic_cast<const store::StoreError*>(&e);
+    spdlog::error("robot {}: session refused: {}", hello.robot_id(), e.what());
+    sendError("unavailable", std::string("cannot open the session: ") + (store_error ? store_error->reason() : e.what()),
+              0, true);
   }
 }
 

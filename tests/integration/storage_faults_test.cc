@@ -192,6 +192,22 @@ TEST(StorageFaults, FullDiskStopsAcknowledgementsKeepsReadsAndLosesNothing) {
   std::this_thread::sleep_for(std::chrono::milliseconds(800));
   EXPECT_FALSE(robot->send(next_seq)) << "acknowledged on a full disk";
   refused.push_back(next_seq++);
+  {
+    // A new robot cannot even be registered: its Hello is refused, naming the cause.
+    client::RobotClientOptions options;
+    options.server_url = rmapd->wsUrl();
+    options.hello.set_robot_id("late-bot");
+    options.hello.set_map(kMap);
+    client::RobotClient late(options);
+    try {
+      late.connect();
+      ADD_FAILURE() << "a Hello was welcomed on a full disk";
+    } catch (const client::ClientError& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find("unavailable: cannot open the session: disk I/O error"), std::string::npos) << what;
+      EXPECT_EQ(what.find(data.string()), std::string::npos) << what;
+    }
+  }
   client::HttpClient http(rmapd->httpUrl());
   EXPECT_EQ(getJson(http, "/healthz")["status"], "ok");
   expectInMap(http, acked, refused);
