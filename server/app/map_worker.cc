@@ -474,9 +474,11 @@ void MapWorker::flushTrajectories() {
   if (pending_poses_.empty()) return;
   std::map<std::string, std::vector<store::TrajectoryPose>> by_robot;
   for (auto& [robot, pose] : pending_poses_) by_robot[robot].push_back(pose);
-  pending_poses_.clear();
   last_pose_flush_ = Clock::now();
   for (const auto& [robot, poses] : by_robot) store_.appendTrajectory(robot, poses);
+  // Only once stored (writing a pose again replaces it): dropped on a failed write, say on a
+  // full disk, they would be missing for good once a later snapshot covers their messages.
+  pending_poses_.clear();
 }
 
 bool MapWorker::importBlocks(const map3d::MapBlocks& blocks, bool replace) {

@@ -79,6 +79,9 @@ int main(int argc, char** argv) {
   sigaddset(&signals, SIGTERM);
   pthread_sigmask(SIG_BLOCK, &signals, nullptr);
   std::signal(SIGPIPE, SIG_IGN);
+  // Under a file size limit (ulimit -f) a write past it then fails with EFBIG,
+  // which the store reports like a full disk, instead of killing the server.
+  std::signal(SIGXFSZ, SIG_IGN);
 
   try {
     // The API works without the viewer: say so once here, and GET / answers 503 with the fix.

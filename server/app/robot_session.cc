@@ -146,7 +146,11 @@ void RobotSession::handleHello(const v1::Hello& hello) {
   } catch (const std::exception& e) {
     robot_id_.clear();
     map_.reset();
-    sendError("unavailable", std::string("cannot open the session: ") + e.what(), 0, true);
+    // A store failure (e.g. a full disk) is named by its cause, without the server's paths.
+    const auto* store_error = dynamic_cast<const store::StoreError*>(&e);
+    spdlog::error("robot {}: session refused: {}", hello.robot_id(), e.what());
+    sendError("unavailable", std::string("cannot open the session: ") + (store_error ? store_error->reason() : e.what()),
+              0, true);
   }
 }
 
@@ -173,14 +177,20 @@ void RobotSession::handleData(std::string frame, std::shared_ptr<v1::RobotMessag
       std::move(record), [self, map, message, seq, received](const store::AppendResult& result, std::exception_ptr error) {
         if (error) {
           std::string text = "unknown";
+          std::string reason = "unknown";  // what the robot is told: the cause, not the server's paths
           try {
             std::rethrow_exception(error);
+          } catch (const store::StoreError& e) {
+            text = e.what();
+            reason = e.reason();
           } catch (const std::exception& e) {
             text = e.what();
           }
           self->service_.metrics().store_failures.fetch_add(1, std::memory_order_relaxed);
           spdlog::error("robot {}: message {} not stored: {}", self->robot_id_, seq, text);
-          return self->finish(seq, false, received, "the message could not be stored; it was not acknowledged");
+          const std::string refusal =
+              "the message could not be stored (" + reason + "); it was not acknowledged, resend it later";
+          return self->finish(seq, false, received, refusal.c_str());
         }
         if (result.duplicate) {
           // Acked = durable and in the map: the first copy may still be waiting for its worker.

@@ -51,9 +51,13 @@ void Checkpointer::checkpoint() {
     log_pages_at_restart_ = log_pages;
   }
   // SQLITE_BUSY: readers or a writer held on past the busy timeout; the next round retries.
-  if (rc != SQLITE_OK && rc != SQLITE_BUSY) {
-    spdlog::warn("store: checkpoint of {} failed: {}", connection_.file().string(),
-                 sqlite3_errmsg(connection_.handle()));
+  if (rc != SQLITE_OK && rc != SQLITE_BUSY && !failing_) {
+    spdlog::warn("store: checkpoint of {} failed: {} (logged once until checkpoints work again)",
+                 connection_.file().string(), sqlite3_errmsg(connection_.handle()));
+    failing_ = true;
+  } else if (rc == SQLITE_OK && failing_) {
+    spdlog::info("store: checkpoints of {} work again", connection_.file().string());
+    failing_ = false;
   }
 }
 

@@ -41,6 +41,9 @@ class Checkpointer {
   Connection connection_;
   int restart_pages_;
   int log_pages_at_restart_ = -1;  ///< WAL length seen by the last restarting checkpoint
+  /// The last checkpoint failed: a full disk fails every one, 10 per second, so
+  /// only the first failure and the recovery are logged.
+  bool failing_ = false;
   std::chrono::milliseconds period_;
   WriteGate& write_gate_;
   std::mutex mutex_;

@@ -28,7 +28,8 @@ std::string reasonOf(sqlite3* db, int code) {
 }
 
 StoreError errorOf(std::string_view operation, const std::filesystem::path& file, sqlite3* db, int code) {
-  return StoreError(std::string(operation) + " failed on " + file.string() + ": " + reasonOf(db, code));
+  std::string reason = reasonOf(db, code);
+  return StoreError(std::string(operation) + " failed on " + file.string() + ": " + reason, reason);
 }
 
 }  // namespace

@@ -25,6 +25,14 @@ namespace rmap::store {
 class StoreError : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
+  /// @param reason  the cause alone, without the operation and file of `what`
+  StoreError(const std::string& what, std::string reason) : std::runtime_error(what), reason_(std::move(reason)) {}
+  /// The cause (e.g. "database or disk is full (No space left on device)"), fit
+  /// to show a client; what() when none was given.
+  std::string reason() const { return reason_.empty() ? what() : reason_; }
+
+ private:
+  std::string reason_;
 };
 
 struct StoreOptions {

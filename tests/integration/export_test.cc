@@ -13,6 +13,7 @@
 #include "image_files.h"
 #include "client/laser2d_robot.h"
 #include "rmap_cli.h"
+#include "laser_walker.h"
 #include "rmapd_process.h"
 #include "scene_clouds.h"
 #include "sim/building.h"
@@ -57,16 +58,11 @@ class Export : public ::testing::Test {
     building.max_furniture_per_room = 1;
     sim::BuildingLayout layout;
     sim::VoxelWorld world = sim::makeBuilding(building, 3, &layout);
-    client::extendMarkersToLaserPlane(world, layout, building.floor_height_m, 1.0);
-    sim::TrajectoryOptions path;
-    path.sensor_height_m = 1.0;
-    path.num_poses = 160;
-    path.step_m = 0.26;
-    client::Laser2dRobotOptions laser;
-    laser.mount_height_m = 1.0;
-    client::Laser2dRobot walker(world, sim::planTrajectory(world, path, 5), laser, 11);
+    client::extendMarkersToLaserPlane(world, layout, building.floor_height_m, kWalkerLaserHeight_m);
+    constexpr int kScans = 160;
+    client::Laser2dRobot walker = buildingWalker(world, kScans);
     std::vector<v1::RobotMessage> scans;
-    for (int k = 0; k < path.num_poses; ++k) {
+    for (int k = 0; k < kScans; ++k) {
       v1::RobotMessage m;
       *m.mutable_scan() = walker.next().scan;
       m.mutable_scan()->set_stamp_ns(static_cast<int64_t>(k) * 100'000'000);

@@ -41,6 +41,8 @@ class RmapdProcess {
   RmapdProcess& operator=(const RmapdProcess&) = delete;
 
   uint16_t port() const { return port_; }
+  /// The process id while it runs (e.g. to set its resource limits), -1 after it ended.
+  pid_t pid() const { return pid_; }
   std::string httpUrl() const { return "http://127.0.0.1:" + std::to_string(port_); }
   std::string wsUrl() const { return "ws://127.0.0.1:" + std::to_string(port_); }
   /// SIGKILL and reap: a crash.

@@ -231,7 +231,10 @@ struct RobotClient::Impl {
           std::lock_guard lock(mutex);
           if (state != State::connecting) break;  // a second Welcome means nothing
           welcome = message.welcome();
-          next_seq = message.welcome().last_durable_seq() + 1;
+          // Never below a seq this client sent before: messages of a dropped stream
+          // may still be committing, and a new message under their seq would be
+          // taken for a duplicate and dropped.
+          next_seq = std::max(next_seq, message.welcome().last_durable_seq() + 1);
           state = State::open;
         }
         cv.notify_all();
@@ -358,6 +361,38 @@ struct RobotClient::Impl {
     asio::post(ioc, [this, frame = std::move(frame)]() mutable { enqueue(std::move(frame)); });
   }
 
+  /// send() (the next seq) or resend() (`keep_seq`: the message's own).
+  uint64_t send(rmap::v1::RobotMessage message, bool keep_seq) {
+    std::lock_guard send_lock(send_mutex);
+    std::unique_lock lock(mutex);
+    const bool room = cv.wait_for(lock, options.timeout, [this] {
+      return state != State::open || in_flight.size() < options.max_in_flight;
+    });
+    if (state != State::open) throw ClientError(closedMessage());
+    if (!room) {
+      throw ClientError("timed out after " + std::to_string(options.timeout.count()) + " ms waiting for acks (" +
+                        std::to_string(in_flight.size()) + " in flight)");
+    }
+    const uint64_t seq = keep_seq ? message.seq() : next_seq;
+    const uint64_t max_frame = welcome->max_frame_bytes();
+    lock.unlock();  // serialising a large cloud takes a while; acks may come in meanwhile
+
+    message.set_seq(seq);
+    std::string bytes = message.SerializeAsString();
+    if (max_frame != 0 && bytes.size() > max_frame) {
+      throw ClientError("message of " + std::to_string(bytes.size()) + " bytes exceeds the server's limit of " +
+                        std::to_string(max_frame));
+    }
+    lock.lock();
+    if (state != State::open) throw ClientError(closedMessage());
+    in_flight.emplace(seq, Clock::now());
+    next_seq = std::max(next_seq, seq + 1);
+    last_sent = std::max(last_sent, seq);
+    lock.unlock();
+    post({std::move(bytes), true});
+    return seq;
+  }
+
   /// For send() on a session that is not open; call with `mutex` held.
   std::string closedMessage() const {
     if (state == State::closing) return "connection to " + options.server_url + " is closing";
@@ -430,36 +465,11 @@ rmap::v1::Welcome RobotClient::connect() {
   throw ClientError("connecting to " + d.options.server_url + ": " + why);
 }
 
-uint64_t RobotClient::send(rmap::v1::RobotMessage message) {
-  Impl& d = *impl_;
-  std::lock_guard send_lock(d.send_mutex);
-  std::unique_lock lock(d.mutex);
-  const bool room = d.cv.wait_for(lock, d.options.timeout, [&d] {
-    return d.state != Impl::State::open || d.in_flight.size() < d.options.max_in_flight;
-  });
-  if (d.state != Impl::State::open) throw ClientError(d.closedMessage());
-  if (!room) {
-    throw ClientError("timed out after " + std::to_string(d.options.timeout.count()) + " ms waiting for acks (" +
-                      std::to_string(d.in_flight.size()) + " in flight)");
-  }
-  const uint64_t seq = d.next_seq;
-  const uint64_t max_frame = d.welcome->max_frame_bytes();
-  lock.unlock();  // serialising a large cloud takes a while; acks may come in meanwhile
+uint64_t RobotClient::send(rmap::v1::RobotMessage message) { return impl_->send(std::move(message), false); }
 
-  message.set_seq(seq);
-  std::string bytes = message.SerializeAsString();
-  if (max_frame != 0 && bytes.size() > max_frame) {
-    throw ClientError("message of " + std::to_string(bytes.size()) + " bytes exceeds the server's limit of " +
-                      std::to_string(max_frame));
-  }
-  lock.lock();
-  if (d.state != Impl::State::open) throw ClientError(d.closedMessage());
-  d.in_flight.emplace(seq, Clock::now());
-  d.next_seq = seq + 1;
-  d.last_sent = seq;
-  lock.unlock();
-  d.post({std::move(bytes), true});
-  return seq;
+uint64_t RobotClient::resend(rmap::v1::RobotMessage message) {
+  if (message.seq() == 0) throw ClientError("resend needs the message's original seq, not 0");
+  return impl_->send(std::move(message), true);
 }
 
 void RobotClient::sendRaw(const std::string& bytes, bool binary) {

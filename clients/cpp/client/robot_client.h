@@ -68,7 +68,8 @@ class RobotClient {
   void onError(ErrorCallback callback);
 
   /// Connects, sends Hello and waits for Welcome. Sequence numbers continue
-  /// after Welcome::last_durable_seq.
+  /// after Welcome::last_durable_seq, or after the highest seq this client
+  /// sent in an earlier session if that is higher.
   /// @throws ClientError (refused upgrade with the HTTP status and body,
   ///         Error reply, timeout)
   rmap::v1::Welcome connect();
@@ -77,6 +78,12 @@ class RobotClient {
   /// number. Blocks while max_in_flight messages are unacknowledged.
   /// @throws ClientError when the connection is closed or the wait times out
   uint64_t send(rmap::v1::RobotMessage message);
+  /// Sends a message again with the seq it carries, e.g. one of an earlier
+  /// session that was never acknowledged (API §5.10: the server acks it as a
+  /// duplicate if it was stored after all). Tracked, blocking and throwing
+  /// like send(); later send()s number after the highest seq sent.
+  /// @throws ClientError also when the message's seq is 0
+  uint64_t resend(rmap::v1::RobotMessage message);
   /// Sends raw bytes as one binary frame (tests of bad input).
   void sendRaw(const std::string& bytes, bool binary = true);
 

@@ -126,6 +126,42 @@ TEST(RobotClient, ReconnectResumesAfterWhatTheServerHolds) {
   EXPECT_EQ(server.hellos().size(), 2u);
 }
 
+TEST(RobotClient, ReconnectNeverReusesTheSeqsOfTheDroppedSession) {
+  FakeRobotServerOptions fake;
+  fake.ack = false;  // nothing durable yet when the stream drops: Welcome says 0 again
+  FakeRobotServer server(fake);
+  RobotClient robot(optionsFor(server));
+  robot.connect();
+  for (int i = 0; i < 3; ++i) robot.send(odometry(i));
+  robot.close();
+  EXPECT_EQ(robot.connect().last_durable_seq(), 0u);
+  EXPECT_EQ(robot.send(odometry(3)), 4u);  // 1..3 may still be committing on the server
+}
+
+TEST(RobotClient, ResendKeepsTheOriginalSeqAndNewMessagesNumberAfterTheHighest) {
+  FakeRobotServerOptions fake;
+  fake.last_durable_seq = 5;
+  FakeRobotServer server(fake);
+  RobotClient robot(optionsFor(server));
+  robot.connect();
+  v1::RobotMessage old = odometry(3);
+  old.set_seq(3);
+  EXPECT_EQ(robot.resend(old), 3u);
+  EXPECT_EQ(robot.send(odometry(6)), 6u);  // below the server's last durable seq: numbering is unchanged
+  old.set_seq(9);
+  EXPECT_EQ(robot.resend(old), 9u);
+  EXPECT_EQ(robot.send(odometry(10)), 10u);
+  EXPECT_EQ(robot.lastSentSeq(), 10u);
+  ASSERT_TRUE(robot.waitAllAcked(milliseconds(3000)));
+  EXPECT_EQ(robot.ackedCount(), 4u);
+  std::vector<uint64_t> seqs;
+  for (const v1::RobotMessage& m : server.messages()) seqs.push_back(m.seq());
+  EXPECT_EQ(seqs, (std::vector<uint64_t>{3, 6, 9, 10}));
+  EXPECT_EQ(server.messages()[0].odometry().stamp_ns(), 3);
+  old.set_seq(0);
+  EXPECT_THROW(robot.resend(old), ClientError);
+}
+
 TEST(RobotClient, EveryMessageIsAckedWithItsLatency) {
   FakeRobotServerOptions fake;
   fake.ack_delay = milliseconds(5);

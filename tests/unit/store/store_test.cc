@@ -488,6 +488,12 @@ TEST(Store, FailedAppendWritesNothingAndTheStoreStaysUsable) {
   const std::string error = storeErrorOf([&] { store->append(too_big); });
   EXPECT_NE(error.find("full"), std::string::npos) << error;
   EXPECT_NE(error.find("append messages"), std::string::npos) << error;
+  try {
+    store->append(too_big);
+    ADD_FAILURE() << "the batch fitted the second time";
+  } catch (const StoreError& e) {
+    EXPECT_EQ(e.reason(), "database or disk is full");  // the cause alone: no operation, no path
+  }
   EXPECT_EQ(store->messageCount(), 1u);
   EXPECT_EQ(allMessages(*store).size(), 1u);
   EXPECT_EQ(store->lastSeq("r"), 1u);
