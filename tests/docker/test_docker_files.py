@@ -39,6 +39,7 @@ INSTRUCTIONS = {
 TEST_ONLY_PACKAGES = {
     "libgtest-dev", "libgmock-dev", "libbenchmark-dev", "liboctomap-dev", "chromium", "jq",
     "python3-protobuf", "python3-websockets", "python3-yaml",
+    "openssl",  # the command line makes the TLS tests' certificates
 }
 JSON_FORM = {"CMD", "ENTRYPOINT", "SHELL"}  # instructions whose argument, when it starts with [, is a JSON array
 
