@@ -27,7 +27,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-#ifdef RMAP_CLI_PATH
 /// Runs `rmap replay ARGS` and captures its exit code and output.
 CliRun replay(const fs::path& dir, const std::string& args) { return runRmap("replay " + args, dir); }
 
@@ -410,9 +409,6 @@ TEST_F(ReplayTest, ScanDatEqualsTheOfflineBuild) {
   EXPECT_EQ(replayCheck(dir_->path(), "--server " + rmapd_->httpUrl() + " --map scandat --resolution 0.1 --scans " + scans, out), 0)
       << out;
 }
-#endif
-#else
-TEST(ReplayTest, NeedsTheCli) { GTEST_SKIP() << "the rmap CLI is not built"; }
 #endif
 
 }  // namespace

@@ -26,7 +26,6 @@ inline std::string fileText(const std::filesystem::path& path) {
   return std::move(text).str();
 }
 
-#ifdef RMAP_CLI_PATH  // defined once the CLI has sources
 /// `rmap <args>` (arguments already quoted for the shell), output kept in `scratch`.
 inline CliRun runRmap(const std::string& args, const std::filesystem::path& scratch) {
   const std::filesystem::path out = scratch / "rmap.out", err = scratch / "rmap.err";
@@ -39,6 +38,5 @@ inline CliRun runRmap(const std::string& args, const std::filesystem::path& scra
   run.err = fileText(err);
   return run;
 }
-#endif
 
 }  // namespace rmap::testing

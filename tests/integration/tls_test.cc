@@ -118,7 +118,6 @@ TEST_F(Tls, RobotStreamsOverWssAndQueriesAnswerOverHttps) {
   client::HttpClient anonymous(url("https"), {}, std::chrono::milliseconds(5000), server_->certificate_file.string());
   EXPECT_EQ(anonymous.get("/v1/maps").status, 401);
 
-#ifdef RMAP_CLI_PATH
   // The rmap CLI's map commands over https:// with --ca-file: every cuboid of the map.
   const nlohmann::json& bounds = map["bounds"];
   std::ostringstream box;
@@ -135,7 +134,6 @@ TEST_F(Tls, RobotStreamsOverWssAndQueriesAnswerOverHttps) {
   const nlohmann::json cuboids = nlohmann::json::parse(query.out)["cuboids"];
   ASSERT_FALSE(cuboids.empty()) << query.out;
   EXPECT_TRUE(cuboids.front().contains("probability")) << cuboids.front();
-#endif
 
   // A stop with a wss:// stream open closes it (TLS close handshake included) and exits cleanly.
   client::RobotClient open_robot(robotOptions("wss", server_->certificate_file));
