@@ -1,6 +1,6 @@
 #pragma once
 /// @file rmap_cli.h
-/// Runs the real `rmap` binary (RMAP_CLI_PATH) for end-to-end tests and
+/// Runs the real `rmap` binary (rmapCliPath()) for end-to-end tests and
 /// captures what it printed.
 
 #include <sys/wait.h>
@@ -10,6 +10,8 @@
 #include <fstream>
 #include <sstream>
 #include <string>
+
+#include "rmapd_process.h"
 
 namespace rmap::testing {
 
@@ -30,7 +32,7 @@ inline std::string fileText(const std::filesystem::path& path) {
 inline CliRun runRmap(const std::string& args, const std::filesystem::path& scratch) {
   const std::filesystem::path out = scratch / "rmap.out", err = scratch / "rmap.err";
   const std::string command =
-      std::string(RMAP_CLI_PATH) + " " + args + " > '" + out.string() + "' 2> '" + err.string() + "'";
+      std::string(rmapCliPath()) + " " + args + " > '" + out.string() + "' 2> '" + err.string() + "'";
   const int status = std::system(command.c_str());
   CliRun run;
   run.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;

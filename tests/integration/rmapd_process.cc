@@ -31,11 +31,14 @@ TempDir::~TempDir() {
   fs::remove_all(path_, ignored);
 }
 
+const char* rmapdPath() { return RMAPD_PATH; }
+const char* rmapCliPath() { return RMAP_CLI_PATH; }
+
 RmapdProcess::RmapdProcess(const fs::path& data_dir, const std::string& config_yaml,
                            std::chrono::seconds startup_timeout, const std::vector<std::string>& extra_args) {
   const fs::path base = data_dir.parent_path();
   log_path_ = base / (data_dir.filename().string() + "-rmapd.log");
-  std::vector<std::string> args{RMAPD_PATH, "--data-dir", data_dir.string()};
+  std::vector<std::string> args{rmapdPath(), "--data-dir", data_dir.string()};
   if (std::find(extra_args.begin(), extra_args.end(), "--listen") == extra_args.end()) {
     args.insert(args.end(), {"--listen", "127.0.0.1:0"});
   }

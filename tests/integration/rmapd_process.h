@@ -12,6 +12,11 @@
 
 namespace rmap::testing {
 
+/// The rmapd binary of this build.
+const char* rmapdPath();
+/// The rmap CLI binary of this build.
+const char* rmapCliPath();
+
 /// A fresh directory under the system temp dir, removed by the destructor.
 class TempDir {
  public:

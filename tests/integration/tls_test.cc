@@ -191,7 +191,7 @@ CliRun runRmapd(const fs::path& dir, const std::string& config_yaml) {
   const fs::path config = dir / "bad-tls.yaml";
   std::ofstream(config) << config_yaml;
   const fs::path err = dir / "rmapd.err";
-  const std::string command = std::string(RMAPD_PATH) + " --listen 127.0.0.1:0 --data-dir '" +
+  const std::string command = std::string(rmapdPath()) + " --listen 127.0.0.1:0 --data-dir '" +
                               (dir / "never").string() + "' --config '" + config.string() + "' > /dev/null 2> '" +
                               err.string() + "'";
   const int status = std::system(command.c_str());
