@@ -33,7 +33,8 @@ inline v1::RobotMessage cloudMessage(uint64_t seq, const Eigen::Vector3d& origin
   m.set_seq(seq);
   v1::PointCloud& cloud = *m.mutable_cloud();
   cloud.set_frame(v1::PointCloud::MAP);
-  cloud.set_stamp_ns(static_cast<int64_t>(seq) * 1000);
+  // Modulo 2^53 before scaling: some tests send seqs near 2^63, and the stamp must not overflow.
+  cloud.set_stamp_ns(static_cast<int64_t>(seq % (uint64_t{1} << 53)) * 1000);
   cloud.mutable_sensor_pose()->mutable_position_m()->set_x(origin.x());
   cloud.mutable_sensor_pose()->mutable_position_m()->set_y(origin.y());
   cloud.mutable_sensor_pose()->mutable_position_m()->set_z(origin.z());
