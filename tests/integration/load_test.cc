@@ -8,13 +8,11 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
-#include <atomic>
 #include <fstream>
-#include <map>
-#include <mutex>
 #include <thread>
 
 #include "api_helpers.h"
+#include "client/metrics_sampler.h"
 #include "client/percentile.h"
 #include "client/query_load.h"
 #include "client/robot_client.h"
@@ -113,42 +111,6 @@ void runRobot(int robot, const std::string& url, const sim::VoxelWorld& world, C
   }
 }
 
-/// Samples /metrics while the load runs and keeps the largest values seen.
-class MetricsSampler {
- public:
-  MetricsSampler(const std::string& url, std::vector<std::string> names) : names_(std::move(names)) {
-    thread_ = std::thread([this, url] {
-      client::HttpClient http(url);
-      while (!stop_) {
-        try {
-          const std::string text = http.get("/metrics").body;
-          std::lock_guard lock(mutex_);
-          for (const std::string& name : names_) max_[name] = std::max(max_[name], metricValue(text, name));
-        } catch (const std::exception&) {
-          // a sample lost under load; the next one counts
-        }
-        std::this_thread::sleep_for(milliseconds(200));
-      }
-    });
-  }
-  ~MetricsSampler() { stop(); }
-  void stop() {
-    stop_ = true;
-    if (thread_.joinable()) thread_.join();
-  }
-  double max(const std::string& name) {
-    std::lock_guard lock(mutex_);
-    return max_[name];
-  }
-
- private:
-  std::vector<std::string> names_;
-  std::atomic<bool> stop_{false};
-  std::mutex mutex_;
-  std::map<std::string, double> max_;
-  std::thread thread_;
-};
-
 /// VmHWM of a process (bytes), 0 when unreadable.
 uint64_t peakResidentBytes(pid_t pid) {
   std::ifstream status("/proc/" + std::to_string(pid) + "/status");
@@ -186,7 +148,7 @@ TEST(Load, SixtyFourRobotsThirtyTwoViewersAndQueriesStayBoundedAndLoseNothing) {
   viewer_options.reading = kReadingViewers;
   viewer_options.stalled = kStalledViewers;
   client::ViewerLoad viewers(viewer_options);
-  MetricsSampler sampler(rmapd.httpUrl(), {"rmap_viewer_queue_bytes", "rmap_resident_memory_bytes",
+  client::MetricsSampler sampler(rmapd.httpUrl(), {}, {"rmap_viewer_queue_bytes", "rmap_resident_memory_bytes",
                                            "rmap_robot_connections", "rmap_viewers_skipping"});
 
   std::vector<RobotOutcome> outcomes(kRobots);

@@ -1,0 +1,54 @@
+#include "client/metrics_sampler.h"
+
+#include <algorithm>
+
+#include "client/http_client.h"
+#include "client/robot_client.h"
+
+namespace rmap::client {
+
+double prometheusValue(const std::string& text, const std::string& name) {
+  const std::string key = name + " ";
+  for (size_t at = text.find(key); at != std::string::npos; at = text.find(key, at + 1)) {
+    if (at == 0 || text[at - 1] == '\n') return std::stod(text.substr(at + key.size()));
+  }
+  return -1.0;
+}
+
+MetricsSampler::MetricsSampler(const std::string& http_url, const std::string& token, std::vector<std::string> names,
+                               std::chrono::milliseconds period)
+    : names_(std::move(names)) {
+  for (const std::string& name : names_) max_[name] = -1.0;
+  Endpoint::parse(http_url);  // a bad URL throws here, not on the thread
+  thread_ = std::thread([this, http_url, token, period] {
+    HttpClient http(http_url, token);
+    while (!stop_) {
+      try {
+        const HttpResponse response = http.get("/metrics");
+        if (response.status == 200) {
+          ++samples_;
+          std::lock_guard lock(mutex_);
+          for (const std::string& name : names_) max_[name] = std::max(max_[name], prometheusValue(response.body, name));
+        }
+      } catch (const ClientError&) {
+        // a poll lost under load
+      }
+      std::this_thread::sleep_for(period);
+    }
+  });
+}
+
+MetricsSampler::~MetricsSampler() { stop(); }
+
+void MetricsSampler::stop() {
+  stop_ = true;
+  if (thread_.joinable()) thread_.join();
+}
+
+double MetricsSampler::max(const std::string& name) const {
+  std::lock_guard lock(mutex_);
+  const auto it = max_.find(name);
+  return it == max_.end() ? -1.0 : it->second;
+}
+
+}  // namespace rmap::client
