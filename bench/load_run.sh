@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The recorded load run (docs/RELIABILITY.md "Load", BENCHMARKS.md §9): a fresh rmapd with a
-# 1 GiB memory bound and 1 MiB viewer send queues, then `rmap-bench load` against it, then
+# 1 GiB memory bound and 256 KiB viewer send queues, then `rmap-bench load` against it, then
 # rmapd's CPU time and peak resident memory from the kernel. Extra arguments go to
 # rmap-bench load (defaults: 64 robots, 8 of them 2D-laser, 2 messages/s each, 32 viewers of
 # which 8 stalled, 4 query connections, 30 s).
@@ -21,7 +21,7 @@ trap 'stop_rmapd; rm -rf "$work"' EXIT
 cat >"$work/rmapd.yaml" <<YAML
 limits:
   max_memory_bytes: 1073741824
-  viewer_send_queue_bytes: 1048576
+  viewer_send_queue_bytes: 262144
 YAML
 "$bin/rmapd" --listen 127.0.0.1:0 --data-dir "$work/data" --config "$work/rmapd.yaml" \
   >"$work/rmapd.out" 2>"$work/rmapd.err" &

@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <fstream>
+#include <sstream>
 #include <thread>
 
 #include "api_helpers.h"
@@ -33,20 +34,28 @@ constexpr int kColumnRobots = 56;
 constexpr int kLaserRobots = 8;
 constexpr int kRobots = kColumnRobots + kLaserRobots;
 constexpr int kColumnMaps = 4;  ///< column robots share these maps, 14 each
+/// Each robot sends at least this many messages, and goes on (up to the most) until the
+/// stalled viewers are being skipped: how soon depends on how fast the machine ticks.
 constexpr uint64_t kCloudsPerRobot = 60;
+constexpr uint64_t kMostCloudsPerRobot = 200;
 constexpr double kCloudRate_hz = 8.0;
 constexpr uint64_t kScansPerRobot = 30;
+constexpr uint64_t kMostScansPerRobot = 100;
 constexpr double kScanRate_hz = 4.0;
 constexpr int kReadingViewers = 24;
 constexpr int kStalledViewers = 8;
 constexpr size_t kViewerQueueBytes = 64u << 10;
 constexpr uint64_t kMemoryBoundBytes = 512u << 20;
-/// Generous: only a stall fails it, not a busy machine.
-constexpr double kAckP99Bound_ms = 2000.0;
+/// Generous: only a stall fails them, not a busy machine. The server's own measure (frame
+/// read → ack queued) is the bound it keeps; the robots' adds their threads' waits for a core.
+constexpr double kServerAckP99Bound_s = 2.5;  // a bucket bound of rmap_ack_latency_seconds
+constexpr double kRobotAckP99Bound_ms = 5000.0;
 
 std::string columnMap(int robot) { return "load-" + std::to_string(robot % kColumnMaps); }
 /// Column of robot `robot`'s k-th cloud: distinct within its map.
-uint64_t columnIndex(int robot, uint64_t k) { return static_cast<uint64_t>(robot / kColumnMaps) * kCloudsPerRobot + k; }
+uint64_t columnIndex(int robot, uint64_t k) {
+  return static_cast<uint64_t>(robot / kColumnMaps) * kMostCloudsPerRobot + k;
+}
 std::string robotId(int robot) { return "load-bot-" + std::to_string(robot); }
 
 /// What one robot saw of its stream.
@@ -58,11 +67,13 @@ struct RobotOutcome {
   std::vector<std::string> errors;
 };
 
-/// Robot `robot` from Hello to its last ack, sending at `rate_hz`; never throws.
+/// Robot `robot` from Hello to its last ack, sending at its rate until it sent its least
+/// messages and `enough` is set, or its most; never throws.
 void runRobot(int robot, const std::string& url, const sim::VoxelWorld& world, Clock::time_point start,
-              RobotOutcome& out) {
+              const std::atomic<bool>& enough, RobotOutcome& out) {
   const bool laser = robot >= kColumnRobots;
-  const uint64_t messages = laser ? kScansPerRobot : kCloudsPerRobot;
+  const uint64_t least = laser ? kScansPerRobot : kCloudsPerRobot;
+  const uint64_t most = laser ? kMostScansPerRobot : kMostCloudsPerRobot;
   const auto period = std::chrono::duration_cast<Clock::duration>(
       std::chrono::duration<double>(1.0 / (laser ? kScanRate_hz : kCloudRate_hz)));
   try {
@@ -71,7 +82,7 @@ void runRobot(int robot, const std::string& url, const sim::VoxelWorld& world, C
     options.server_url = url;
     options.hello.set_robot_id(robotId(robot));
     if (laser) {
-      walker.emplace(buildingWalker(world, static_cast<int>(kScansPerRobot)));
+      walker.emplace(buildingWalker(world, static_cast<int>(kMostScansPerRobot)));
       options.hello.set_map("load-laser-" + std::to_string(robot));
       *options.hello.add_sensors() = walker->sensor();
     } else {
@@ -90,7 +101,7 @@ void runRobot(int robot, const std::string& url, const sim::VoxelWorld& world, C
     client.connect();
     // Robots are spread over the period, not in step.
     Clock::time_point due = start + period * robot / kRobots;
-    for (uint64_t k = 0; k < messages; ++k) {
+    for (uint64_t k = 0; k < most && (k < least || !enough); ++k) {
       std::this_thread::sleep_until(due);
       const int64_t stamp_ns = 1'000'000'000 + static_cast<int64_t>(k) * 100'000'000;
       v1::RobotMessage message;
@@ -153,9 +164,17 @@ TEST(Load, SixtyFourRobotsThirtyTwoViewersAndQueriesStayBoundedAndLoseNothing) {
 
   std::vector<RobotOutcome> outcomes(kRobots);
   std::vector<std::thread> robots;
+  std::atomic<bool> stalled_skipped{false};
+  std::atomic<bool> robots_done{false};
+  std::thread watch([&] {
+    while (!robots_done && sampler.latest("rmap_viewers_skipping") < kStalledViewers) {
+      std::this_thread::sleep_for(milliseconds(100));
+    }
+    stalled_skipped = true;
+  });
   const Clock::time_point start = Clock::now() + milliseconds(500);  // every robot connected by then
   for (int r = 0; r < kRobots; ++r) {
-    robots.emplace_back([&, r] { runRobot(r, rmapd.wsUrl(), scene.world, start, outcomes[r]); });
+    robots.emplace_back([&, r] { runRobot(r, rmapd.wsUrl(), scene.world, start, stalled_skipped, outcomes[r]); });
   }
   std::this_thread::sleep_until(start + milliseconds(500));  // the maps exist
   client::QueryLoadOptions query_options;
@@ -164,6 +183,8 @@ TEST(Load, SixtyFourRobotsThirtyTwoViewersAndQueriesStayBoundedAndLoseNothing) {
   query_options.targets = queryTargets();
   client::QueryLoad queries(query_options);
   for (std::thread& t : robots) t.join();
+  robots_done = true;
+  watch.join();
   const client::QueryLoadResult query_result = queries.stop();
   std::this_thread::sleep_for(milliseconds(300));  // the last ticks reach the viewers
   sampler.stop();
@@ -180,7 +201,7 @@ TEST(Load, SixtyFourRobotsThirtyTwoViewersAndQueriesStayBoundedAndLoseNothing) {
     const RobotOutcome& o = outcomes[r];
     const bool laser = r >= kColumnRobots;
     EXPECT_TRUE(o.errors.empty()) << robotId(r) << ": " << o.errors.front();
-    EXPECT_EQ(o.sent, laser ? kScansPerRobot : kCloudsPerRobot) << robotId(r);
+    EXPECT_GE(o.sent, laser ? kScansPerRobot : kCloudsPerRobot) << robotId(r);
     EXPECT_EQ(o.acked, o.sent) << robotId(r);
     if (laser) {
       EXPECT_EQ(o.pose_estimates, o.sent) << robotId(r) << ": the 2D SLAM answers every scan";
@@ -190,11 +211,15 @@ TEST(Load, SixtyFourRobotsThirtyTwoViewersAndQueriesStayBoundedAndLoseNothing) {
     scans += laser ? o.sent : 0;
   }
   const double p50 = client::percentile(latencies_ms, 0.50), p99 = client::percentile(latencies_ms, 0.99);
-  EXPECT_LT(p99, kAckP99Bound_ms) << "ack latency p50 " << p50 << " ms";
+  EXPECT_LT(p99, kRobotAckP99Bound_ms) << "ack latency p50 " << p50 << " ms";
+  const double server_within_bound = metricValue(
+      metrics, "rmap_ack_latency_seconds_bucket{le=\"" + (std::ostringstream() << kServerAckP99Bound_s).str() + "\"}");
+  EXPECT_GE(server_within_bound, 0.99 * double(sent)) << "acks within " << kServerAckP99Bound_s << " s by the server's histogram";
   std::cout << "load: " << sent << " messages from " << kRobots << " robots in " << wall_s << " s, ack p50 " << p50
             << " ms p99 " << p99 << " ms max " << client::percentile(latencies_ms, 1.0) << " ms; "
             << query_result.answered << " queries p99 " << client::percentile(query_result.latencies_ms, 0.99)
-            << " ms; resident peak " << peakResidentBytes(rmapd.pid()) / (1 << 20) << " MiB; viewer frames sent "
+            << " ms, " << server_within_bound << " acks within " << kServerAckP99Bound_s
+            << " s by the server; resident peak " << peakResidentBytes(rmapd.pid()) / (1 << 20) << " MiB; viewer frames sent "
             << metricValue(metrics, "rmap_viewer_frames_sent_total") << " dropped "
             << metricValue(metrics, "rmap_viewer_frames_dropped_total") << ", bytes per reading viewer "
             << viewer_result.reading[0].bytes << std::endl;
@@ -207,7 +232,7 @@ TEST(Load, SixtyFourRobotsThirtyTwoViewersAndQueriesStayBoundedAndLoseNothing) {
   for (int m = 0; m < kColumnMaps; ++m) {
     std::vector<Eigen::Vector3d> endpoints;
     for (int r = m; r < kColumnRobots; r += kColumnMaps) {
-      for (uint64_t k = 0; k < kCloudsPerRobot; ++k) {
+      for (uint64_t k = 0; k < outcomes[r].sent; ++k) {
         for (const Eigen::Vector3d& p : columnEndpoints(columnIndex(r, k))) endpoints.push_back(p);
       }
     }

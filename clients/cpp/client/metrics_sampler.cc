@@ -18,7 +18,7 @@ double prometheusValue(const std::string& text, const std::string& name) {
 MetricsSampler::MetricsSampler(const std::string& http_url, const std::string& token, std::vector<std::string> names,
                                std::chrono::milliseconds period)
     : names_(std::move(names)) {
-  for (const std::string& name : names_) max_[name] = -1.0;
+  for (const std::string& name : names_) max_[name] = latest_[name] = -1.0;
   Endpoint::parse(http_url);  // a bad URL throws here, not on the thread
   thread_ = std::thread([this, http_url, token, period] {
     HttpClient http(http_url, token);
@@ -28,7 +28,10 @@ MetricsSampler::MetricsSampler(const std::string& http_url, const std::string& t
         if (response.status == 200) {
           ++samples_;
           std::lock_guard lock(mutex_);
-          for (const std::string& name : names_) max_[name] = std::max(max_[name], prometheusValue(response.body, name));
+          for (const std::string& name : names_) {
+            latest_[name] = prometheusValue(response.body, name);
+            max_[name] = std::max(max_[name], latest_[name]);
+          }
         }
       } catch (const ClientError&) {
         // a poll lost under load
@@ -49,6 +52,12 @@ double MetricsSampler::max(const std::string& name) const {
   std::lock_guard lock(mutex_);
   const auto it = max_.find(name);
   return it == max_.end() ? -1.0 : it->second;
+}
+
+double MetricsSampler::latest(const std::string& name) const {
+  std::lock_guard lock(mutex_);
+  const auto it = latest_.find(name);
+  return it == latest_.end() ? -1.0 : it->second;
 }
 
 }  // namespace rmap::client

@@ -16,8 +16,8 @@ namespace rmap::client {
 /// Value of an unlabelled metric (`name value` line) in Prometheus text, -1 when absent.
 double prometheusValue(const std::string& text, const std::string& name);
 
-/// Polls GET /metrics on its own thread and keeps the largest value of each
-/// named metric; a failed poll is skipped (the next one counts).
+/// Polls GET /metrics on its own thread and keeps the latest and the largest
+/// value of each named metric; a failed poll is skipped (the next one counts).
 class MetricsSampler {
  public:
   /// @param http_url  http://host:port; `token` needs the admin role unless loopback-only
@@ -30,6 +30,8 @@ class MetricsSampler {
   void stop();
   /// Largest value of `name` seen so far; -1 before a poll found it.
   double max(const std::string& name) const;
+  /// Value of `name` in the latest poll that answered; -1 before one found it.
+  double latest(const std::string& name) const;
   /// Polls that answered.
   uint64_t samples() const { return samples_.load(); }
 
@@ -38,7 +40,8 @@ class MetricsSampler {
   std::atomic<bool> stop_{false};
   std::atomic<uint64_t> samples_{0};
   mutable std::mutex mutex_;
-  std::map<std::string, double> max_;  ///< guarded by mutex_
+  std::map<std::string, double> max_;     ///< guarded by mutex_
+  std::map<std::string, double> latest_;  ///< guarded by mutex_
   std::thread thread_;
 };
 
