@@ -41,6 +41,10 @@ std::map<std::string, double> counters(client::HttpClient& http) {
   std::map<std::string, double> out;
   for (const std::string& name : kCounters) out[name] = prometheusValue(r.body, name);
   out["rmap_resident_memory_peak_bytes"] = prometheusValue(r.body, "rmap_resident_memory_peak_bytes");
+  // Quantiles since the server started: a fresh server's are the run's.
+  out["server_ack_p99_s"] = client::prometheusQuantile(r.body, "rmap_ack_latency_seconds", 0.99);
+  out["viewer_tick_p50_s"] = client::prometheusQuantile(r.body, "rmap_viewer_tick_seconds", 0.50);
+  out["viewer_tick_p99_s"] = client::prometheusQuantile(r.body, "rmap_viewer_tick_seconds", 0.99);
   out["rmap_memory_bound_bytes"] = prometheusValue(r.body, "rmap_memory_bound_bytes");
   return out;
 }
@@ -180,6 +184,9 @@ int runLoadBench(const LoadBenchOptions& o) {
       {"ack_p99_ms", percentile(fed.ack_latencies_ms, 0.99)},
       {"ack_max_ms", percentile(fed.ack_latencies_ms, 1.0)},
       {"server_acked", delta("rmap_messages_acked_total")},
+      {"server_ack_p99_bucket_s", after.at("server_ack_p99_s")},
+      {"viewer_tick_p50_bucket_s", after.at("viewer_tick_p50_s")},
+      {"viewer_tick_p99_bucket_s", after.at("viewer_tick_p99_s")},
       {"server_rejected", delta("rmap_messages_rejected_total")},
       {"server_refused_memory", delta("rmap_messages_refused_memory_total")},
       {"resident_peak_mib", after.at("rmap_resident_memory_peak_bytes") / kMiB},
@@ -208,17 +215,20 @@ int runLoadBench(const LoadBenchOptions& o) {
   for (const std::string& e : fed.errors) std::cerr << "robot error: " << e << "\n";
   for (const std::string& e : viewed.errors) std::cerr << "viewer error: " << e << "\n";
   for (const std::string& e : queried->first_errors) std::cerr << "query error: " << e << "\n";
-  std::printf("robots %d  messages acked %llu (%.0f/s, %llu unacked)  ack p50/p95/p99/max %.1f/%.1f/%.1f/%.1f ms\n"
+  std::printf("robots %d  messages acked %llu (%.0f/s, %llu unacked)  ack p50/p95/p99/max %.1f/%.1f/%.1f/%.1f ms "
+              "(server p99 <= %g s)\n"
               "resident peak %.0f MiB (bound %.0f MiB, 0 = none; %.0f refused for memory)\n"
-              "viewer frames sent %.0f dropped %.0f (stalled viewers %d, largest viewer backlog %.2f MiB)\n"
+              "viewer frames sent %.0f dropped %.0f (stalled viewers %d, largest viewer backlog %.2f MiB), "
+              "viewer tick p50/p99 <= %g/%g s\n"
               "queries %llu (%.0f/s) p50/p99 %.1f/%.1f ms, %llu failed\n",
               o.robots, static_cast<unsigned long long>(messages), results["messages_per_s"].get<double>(),
               static_cast<unsigned long long>(unacked), results["ack_p50_ms"].get<double>(),
               results["ack_p95_ms"].get<double>(), results["ack_p99_ms"].get<double>(),
-              results["ack_max_ms"].get<double>(), results["resident_peak_mib"].get<double>(),
+              results["ack_max_ms"].get<double>(), after.at("server_ack_p99_s"), results["resident_peak_mib"].get<double>(),
               results["memory_bound_mib"].get<double>(), results["server_refused_memory"].get<double>(),
               results["viewer_frames_sent"].get<double>(), results["viewer_frames_dropped"].get<double>(),
-              o.stalled_viewers, results["viewer_queue_max_mib"].get<double>(),
+              o.stalled_viewers, results["viewer_queue_max_mib"].get<double>(), after.at("viewer_tick_p50_s"),
+              after.at("viewer_tick_p99_s"),
               static_cast<unsigned long long>(queried->answered), results["queries_per_s"].get<double>(),
               results["query_p50_ms"].get<double>(), results["query_p99_ms"].get<double>(),
               static_cast<unsigned long long>(queried->failed));

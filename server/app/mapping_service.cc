@@ -411,7 +411,10 @@ void MappingService::tickLoop() {
   while (!tick_wake_.wait_for(lock, std::chrono::milliseconds(config_.viewer_tick_ms), [&] { return stopping_; })) {
     lock.unlock();
     try {
+      const auto tick_start = std::chrono::steady_clock::now();
       viewers_.tick(maps());
+      metrics_.viewer_tick_latency.observe(
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - tick_start).count());
     } catch (const std::exception& e) {
       spdlog::error("viewer tick: {}", e.what());
     }

@@ -137,6 +137,8 @@ std::string renderPrometheus(const Metrics& m, const MetricsGauges& g) {
                               out);
   m.correction_latency.render("rmap_trajectory_correction_seconds",
                               "Time to store corrected trajectories and re-render the 3D map's planar rows.", out);
+  m.viewer_tick_latency.render("rmap_viewer_tick_seconds",
+                               "Time of one viewer tick: tile changes of every map scanned and pushed with the poses.", out);
   return out;
 }
 

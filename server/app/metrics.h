@@ -58,6 +58,7 @@ struct Metrics {
   LatencyHistogram slam2d_scan_latency;  ///< one scan through the 2D SLAM (scan matching and map update)
   LatencyHistogram loop_frame_latency;   ///< one frame through a place recognizer (decoding included)
   LatencyHistogram correction_latency;   ///< corrected trajectories stored and the 3D map's planar rows re-rendered
+  LatencyHistogram viewer_tick_latency;  ///< one viewer tick: every map's tile changes scanned and pushed
 };
 
 /// Gauges read at scrape time.

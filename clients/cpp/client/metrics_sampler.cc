@@ -1,6 +1,7 @@
 #include "client/metrics_sampler.h"
 
 #include <algorithm>
+#include <cmath>
 
 #include "client/http_client.h"
 #include "client/robot_client.h"
@@ -13,6 +14,20 @@ double prometheusValue(const std::string& text, const std::string& name) {
     if (at == 0 || text[at - 1] == '\n') return std::stod(text.substr(at + key.size()));
   }
   return -1.0;
+}
+
+double prometheusQuantile(const std::string& text, const std::string& name, double q) {
+  const double count = prometheusValue(text, name + "_count");
+  if (count <= 0) return -1.0;
+  const std::string prefix = name + "_bucket{le=\"";
+  for (size_t at = text.find(prefix); at != std::string::npos; at = text.find(prefix, at + 1)) {
+    if (at != 0 && text[at - 1] != '\n') continue;
+    const size_t bound_end = text.find("\"} ", at + prefix.size());
+    if (bound_end == std::string::npos) break;
+    const std::string bound = text.substr(at + prefix.size(), bound_end - at - prefix.size());
+    if (std::stod(text.substr(bound_end + 3)) >= q * count) return bound == "+Inf" ? INFINITY : std::stod(bound);
+  }
+  return INFINITY;
 }
 
 MetricsSampler::MetricsSampler(const std::string& http_url, const std::string& token, std::vector<std::string> names,

@@ -16,6 +16,11 @@ namespace rmap::client {
 /// Value of an unlabelled metric (`name value` line) in Prometheus text, -1 when absent.
 double prometheusValue(const std::string& text, const std::string& name);
 
+/// Quantile q (0..1) of a Prometheus histogram `name` (its `_bucket{le=…}` and `_count`
+/// lines): the smallest bucket bound holding that share of the observations, +inf when only
+/// the +Inf bucket does, -1 when the histogram is absent or empty.
+double prometheusQuantile(const std::string& text, const std::string& name, double q);
+
 /// Polls GET /metrics on its own thread and keeps the latest and the largest
 /// value of each named metric; a failed poll is skipped (the next one counts).
 class MetricsSampler {
