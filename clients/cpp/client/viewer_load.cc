@@ -21,8 +21,8 @@ namespace beast = boost::beast;
 namespace websocket = beast::websocket;
 using tcp = asio::ip::tcp;
 
-/// The value of the last "type" key of a viewer frame (rmapd writes keys in
-/// order, so it is the frame's own, after any nested ones).
+/// The value of the last "type" key of a viewer frame: rmapd's JSON has its keys
+/// sorted, and the frames counted (tiles, poses, resync) have no key after "type".
 std::string_view frameType(std::string_view frame) {
   constexpr std::string_view kKey = "\"type\":\"";
   const size_t at = frame.rfind(kKey);
