@@ -3,6 +3,7 @@
 #include <exception>
 #include <iostream>
 
+#include "load/load_bench.h"
 #include "loop/loop_bench.h"
 #include "loop_sim/loop_sim_bench.h"
 #include "map3d/map3d_bench.h"
@@ -55,6 +56,25 @@ int main(int argc, char** argv) {
   s->add_option("--batch-points", server.batch_points, "points per batch query")->check(CLI::Range(1, 10000000));
   s->add_option("--insert-threads", server.insert_threads, "threads tracing one cloud")->check(CLI::Range(1, 64));
   s->add_option("--json", server.json_out, "write results as JSON to this file");
+
+  rmap::bench::LoadBenchOptions load;
+  CLI::App* lo = app.add_subcommand("load", "a running rmapd under many robots, viewers (some stalled) and queries at once");
+  lo->add_option("--server", load.server_url, "http://HOST:PORT of the rmapd under load");
+  lo->add_option("--token", load.token, "admin bearer token (none in loopback-only mode)");
+  lo->add_option("--robots", load.robots, "robots streaming at once")->check(CLI::Range(1, 1024));
+  lo->add_option("--laser-robots", load.laser_robots, "of them, 2D-laser robots (the rest: 3D lidar)")
+      ->check(CLI::Range(0, 1024));
+  lo->add_flag("--shared-map", load.shared_map, "all robots on one map (default: one map each)");
+  lo->add_option("--rate", load.rate_hz, "messages per second per robot")->check(CLI::PositiveNumber);
+  lo->add_option("--seconds", load.seconds, "length of the run")->check(CLI::PositiveNumber);
+  lo->add_option("--lidar-rings", load.lidar_rings, "simulated lidar rings")->check(CLI::Range(1, 1024));
+  lo->add_option("--lidar-columns", load.lidar_columns, "simulated lidar columns")->check(CLI::Range(1, 16384));
+  lo->add_option("--viewers", load.viewers, "viewer streams of every map")->check(CLI::Range(0, 4096));
+  lo->add_option("--stalled-viewers", load.stalled_viewers, "of them, viewers that never read")
+      ->check(CLI::Range(0, 4096));
+  lo->add_option("--query-connections", load.query_connections, "keep-alive connections querying back to back")
+      ->check(CLI::Range(1, 256));
+  lo->add_option("--json", load.json_out, "write results as JSON to this file");
 
   rmap::bench::Slam2dBenchOptions slam2d;
   CLI::App* d = app.add_subcommand("slam2d", "2D laser SLAM on a CARMEN log or a simulated run: relation error, ATE, RPE, speed");
@@ -189,6 +209,7 @@ int main(int argc, char** argv) {
   try {
     if (m->parsed()) return rmap::bench::runMap3dBench(map3d);
     if (s->parsed()) return rmap::bench::runServerBench(server);
+    if (lo->parsed()) return rmap::bench::runLoadBench(load);
     if (d->parsed()) {
       slam2d.slam.loop_closure.enabled = loop_closure == "on";
       return rmap::bench::runSlam2dBench(slam2d);

@@ -12,6 +12,7 @@
 #include "app/mapping_service.h"
 #include "app/rmapd_service.h"
 #include "client/http_client.h"
+#include "client/percentile.h"
 #include "client/sim_feed.h"
 #include "common/machine.h"
 #include "net/server.h"
@@ -22,14 +23,8 @@ namespace rmap::bench {
 namespace {
 
 using json = nlohmann::json;
+using client::percentile;
 using Clock = std::chrono::steady_clock;
-
-double percentile(std::vector<double> values, double q) {
-  if (values.empty()) return 0.0;
-  const size_t k = std::min(values.size() - 1, static_cast<size_t>(q * static_cast<double>(values.size())));
-  std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(k), values.end());
-  return values[k];
-}
 
 /// Figures of one streaming phase.
 json feedJson(const client::SimFeedResult& r) {

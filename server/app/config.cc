@@ -60,6 +60,7 @@ void readLimits(const YAML::Node& node, LimitsConfig& limits) {
   read(node, "viewer_send_queue_bytes", limits.viewer_send_queue_bytes);
   read(node, "max_box_cuboids", limits.max_box_cuboids);
   read(node, "max_import_blocks", limits.max_import_blocks);
+  read(node, "max_memory_bytes", limits.max_memory_bytes);
 }
 
 void readMaps(const YAML::Node& node, MapDefaults& maps) {

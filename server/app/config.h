@@ -42,6 +42,9 @@ struct LimitsConfig {
   /// Blocks of 16³ cells an imported OctoMap may fill (about 150 bytes each once imported);
   /// the file itself is bounded by max_body_bytes
   size_t max_import_blocks = 1'000'000;
+  /// Resident memory of rmapd (bytes) above which robot data and imports are refused
+  /// with "resource_exhausted" until it falls again; 0 = no bound (see app/memory_bound.h)
+  uint64_t max_memory_bytes = 0;
 };
 
 struct MapDefaults {

@@ -58,6 +58,10 @@ net::Response HttpApi::importMap(const net::Request& request, const Target& targ
     throw ApiError(400, "invalid_argument", "replace must be true or false, not '" + replace_text + "'");
   }
   const bool replace = replace_text == "true";
+  if (service_.memoryBound().exceeded()) {
+    service_.metrics().imports_refused_memory.fetch_add(1, std::memory_order_relaxed);
+    throw ApiError(503, "resource_exhausted", service_.memoryBound().describe() + "; nothing was imported, retry later");
+  }
   std::shared_ptr<MapWorker> worker = service_.findMap(name);
   // An existing map keeps its parameters; a new one takes the configured ones.
   const map3d::OccupancyParams occupancy = worker ? worker->map().occupancyParams() : service_.config().maps.occupancy;

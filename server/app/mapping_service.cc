@@ -82,6 +82,7 @@ const char* MappingService::version() { return RMAP_VERSION; }
 
 MappingService::MappingService(Config config, std::optional<RecognizerFactory> recognizers)
     : config_(std::move(config)),
+      memory_bound_(config_.limits.max_memory_bytes),
       viewers_(metrics_, config_.limits.viewer_send_queue_bytes),
       calibrations_(loadCalibrations(config_.slam2d)),
       recognizers_(recognizers ? std::move(*recognizers) : bowRecognizers(config_.loop_closure)) {
@@ -102,6 +103,14 @@ MappingService::MappingService(Config config, std::optional<RecognizerFactory> r
   }
   for (auto& [name, worker] : maps_) worker->start();
   committer_ = std::make_unique<store::GroupCommitter>(*store_);
+  if (memory_bound_.maxBytes() != 0) {
+    const double mib = 1 << 20;
+    spdlog::info("memory bound {:.4g} MiB, resident now {:.0f} MiB", memory_bound_.maxBytes() / mib,
+                 residentBytes() / mib);
+    if (memory_bound_.exceeded()) {
+      spdlog::warn("{}: robot data is refused until resident memory falls below it", memory_bound_.describe());
+    }
+  }
   tick_thread_ = std::thread([this] { tickLoop(); });
 }
 
@@ -402,7 +411,10 @@ void MappingService::tickLoop() {
   while (!tick_wake_.wait_for(lock, std::chrono::milliseconds(config_.viewer_tick_ms), [&] { return stopping_; })) {
     lock.unlock();
     try {
+      const auto tick_start = std::chrono::steady_clock::now();
       viewers_.tick(maps());
+      metrics_.viewer_tick_latency.observe(
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - tick_start).count());
     } catch (const std::exception& e) {
       spdlog::error("viewer tick: {}", e.what());
     }
@@ -422,6 +434,12 @@ MetricsGauges MappingService::gauges() const {
   MetricsGauges g;
   g.robot_connections = robotConnections();
   g.viewer_connections = viewers_.viewers();
+  const ViewerBacklog backlog = viewers_.backlog();
+  g.viewers_skipping = backlog.skipping;
+  g.viewer_queue_bytes = backlog.queued_bytes;
+  g.resident_memory_bytes = residentBytes();
+  g.resident_memory_peak_bytes = peakResidentBytes();
+  g.memory_bound_bytes = memory_bound_.maxBytes();
   if (connection_counter_) g.http_connections = connection_counter_();
   g.commit_queue_messages = committer_->queuedMessages();
   g.commit_queue_bytes = committer_->queuedBytes();

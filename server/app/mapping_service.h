@@ -18,6 +18,7 @@
 
 #include "app/config.h"
 #include "app/map_worker.h"
+#include "app/memory_bound.h"
 #include "app/metrics.h"
 #include "app/place_recognizer.h"
 #include "app/viewer_hub.h"
@@ -58,6 +59,8 @@ class MappingService {
   store::Store& store() { return *store_; }
   store::GroupCommitter& committer() { return *committer_; }
   ViewerHub& viewers() { return viewers_; }
+  /// limits.max_memory_bytes against this process's resident memory.
+  MemoryBound& memoryBound() { return memory_bound_; }
 
   /// The map of that name, created (and stored) with `resolution_m` (0 = the
   /// configured default) when missing.
@@ -120,6 +123,7 @@ class MappingService {
 
   Config config_;
   Metrics metrics_;
+  MemoryBound memory_bound_;
   std::unique_ptr<store::Store> store_;
   int64_t epoch_ = 0;
   ViewerHub viewers_;

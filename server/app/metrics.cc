@@ -63,6 +63,11 @@ std::string renderPrometheus(const Metrics& m, const MetricsGauges& g) {
          load(m.messages_received));
   metric(out, "rmap_messages_rejected_total", "counter", "Robot messages refused with an error.",
          load(m.messages_rejected));
+  metric(out, "rmap_messages_refused_memory_total", "counter",
+         "Robot messages refused because the server was above its memory bound (not stored).",
+         load(m.messages_refused_memory));
+  metric(out, "rmap_imports_refused_memory_total", "counter",
+         "Map imports refused because the server was above its memory bound.", load(m.imports_refused_memory));
   metric(out, "rmap_messages_acked_total", "counter", "Robot messages acknowledged by this process.",
          load(m.messages_acked));
   metric(out, "rmap_messages_duplicate_total", "counter", "Resent messages acknowledged without applying them again.",
@@ -103,6 +108,10 @@ std::string renderPrometheus(const Metrics& m, const MetricsGauges& g) {
          "2D pose graph optimisations applied to trajectories and maps.", load(m.trajectory_corrections));
   metric(out, "rmap_robot_connections", "gauge", "Open robot streams.", g.robot_connections);
   metric(out, "rmap_viewer_connections", "gauge", "Open viewer streams.", g.viewer_connections);
+  metric(out, "rmap_viewers_skipping", "gauge", "Viewers too far behind whose frames are being skipped.",
+         g.viewers_skipping);
+  metric(out, "rmap_viewer_queue_bytes", "gauge", "Bytes queued to viewers, not yet written to their sockets.",
+         g.viewer_queue_bytes);
   metric(out, "rmap_http_connections", "gauge", "Open connections (HTTP and WebSocket).", g.http_connections);
   metric(out, "rmap_commit_queue_messages", "gauge", "Messages waiting to be made durable.", g.commit_queue_messages);
   metric(out, "rmap_commit_queue_bytes", "gauge", "Bytes waiting to be made durable.", g.commit_queue_bytes);
@@ -112,6 +121,13 @@ std::string renderPrometheus(const Metrics& m, const MetricsGauges& g) {
   metric(out, "rmap_maps", "gauge", "Maps held.", g.maps);
   metric(out, "rmap_map_cuboids", "gauge", "Cuboids over all maps.", g.cuboids);
   metric(out, "rmap_map_memory_bytes", "gauge", "Bytes held by all maps.", g.map_memory_bytes);
+  metric(out, "rmap_resident_memory_bytes", "gauge", "Resident memory of the server process.",
+         g.resident_memory_bytes);
+  metric(out, "rmap_resident_memory_peak_bytes", "gauge", "Peak resident memory of the server process since start.",
+         g.resident_memory_peak_bytes);
+  metric(out, "rmap_memory_bound_bytes", "gauge",
+         "Resident memory above which robot data is refused (limits.max_memory_bytes; 0 = none).",
+         g.memory_bound_bytes);
   m.ack_latency.render("rmap_ack_latency_seconds", "From a robot frame's arrival to its acknowledgement.", out);
   m.apply_latency.render("rmap_apply_latency_seconds", "Time to apply one message to its map.", out);
   m.http_latency.render("rmap_http_request_seconds", "Time to answer an HTTP request.", out);
@@ -121,6 +137,8 @@ std::string renderPrometheus(const Metrics& m, const MetricsGauges& g) {
                               out);
   m.correction_latency.render("rmap_trajectory_correction_seconds",
                               "Time to store corrected trajectories and re-render the 3D map's planar rows.", out);
+  m.viewer_tick_latency.render("rmap_viewer_tick_seconds",
+                               "Time of one viewer tick: tile changes of every map scanned and pushed with the poses.", out);
   return out;
 }
 

@@ -30,6 +30,7 @@ class LatencyHistogram {
 struct Metrics {
   std::atomic<uint64_t> messages_received{0};   ///< frames from robots, valid or not
   std::atomic<uint64_t> messages_rejected{0};   ///< refused with an Error
+  std::atomic<uint64_t> messages_refused_memory{0};  ///< of those, refused above the memory bound
   std::atomic<uint64_t> messages_acked{0};      ///< acknowledged by this process (duplicates included)
   std::atomic<uint64_t> messages_duplicate{0};
   std::atomic<uint64_t> messages_durable{0};    ///< held in the store (recovered ones included)
@@ -40,6 +41,7 @@ struct Metrics {
   std::atomic<uint64_t> http_errors{0};         ///< responses with status >= 400
   std::atomic<uint64_t> viewer_frames_sent{0};
   std::atomic<uint64_t> viewer_frames_dropped{0};
+  std::atomic<uint64_t> imports_refused_memory{0};  ///< map imports refused above the memory bound
   std::atomic<uint64_t> snapshots_written{0};
   std::atomic<uint64_t> slam2d_scans{0};          ///< laser scans the 2D SLAM took (replayed ones included)
   std::atomic<uint64_t> slam2d_scans_refused{0};  ///< laser scans the 2D SLAM could not use
@@ -56,12 +58,15 @@ struct Metrics {
   LatencyHistogram slam2d_scan_latency;  ///< one scan through the 2D SLAM (scan matching and map update)
   LatencyHistogram loop_frame_latency;   ///< one frame through a place recognizer (decoding included)
   LatencyHistogram correction_latency;   ///< corrected trajectories stored and the 3D map's planar rows re-rendered
+  LatencyHistogram viewer_tick_latency;  ///< one viewer tick: every map's tile changes scanned and pushed
 };
 
 /// Gauges read at scrape time.
 struct MetricsGauges {
   uint64_t robot_connections = 0;
   uint64_t viewer_connections = 0;
+  uint64_t viewers_skipping = 0;     ///< viewers whose frames are being skipped (they owe a resync)
+  uint64_t viewer_queue_bytes = 0;   ///< bytes queued to all viewers, not yet written to their sockets
   uint64_t http_connections = 0;
   uint64_t commit_queue_messages = 0;
   uint64_t commit_queue_bytes = 0;
@@ -70,6 +75,9 @@ struct MetricsGauges {
   uint64_t maps = 0;
   uint64_t cuboids = 0;
   uint64_t map_memory_bytes = 0;
+  uint64_t resident_memory_bytes = 0;       ///< the process's resident set
+  uint64_t resident_memory_peak_bytes = 0;  ///< its peak since start
+  uint64_t memory_bound_bytes = 0;          ///< limits.max_memory_bytes, 0 = none
 };
 
 std::string renderPrometheus(const Metrics& metrics, const MetricsGauges& gauges);

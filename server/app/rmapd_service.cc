@@ -12,6 +12,11 @@ namespace http = boost::beast::http;
 namespace {
 
 constexpr std::string_view kSubprotocol = "rmap.v1";
+/// A viewer's frames are small JSON notices (tiles come over HTTP): 64 KiB of socket
+/// buffer carries megabytes per second even over Wi-Fi, and a stalled viewer's backlog
+/// then grows in its send queue, bounded by limits.viewer_send_queue_bytes and skipped,
+/// instead of in the kernel's autotuned buffer (megabytes per viewer).
+constexpr size_t kViewerSocketSendBytes = 64u << 10;
 
 net::WsAccept refuse(const net::Request& request, int status, const std::string& code, const std::string& message) {
   net::WsAccept accept;
@@ -65,6 +70,7 @@ net::WsAccept RmapdService::acceptWebSocket(const net::Request& request, const n
     if (!map.empty() && !service_.findMap(map)) return refuse(request, 404, "map_not_found", "no map named '" + map + "'");
     accept.handler = std::make_shared<ViewerSession>(service_.viewers(), map);
     accept.max_send_queue_bytes = limits.viewer_send_queue_bytes;
+    accept.socket_send_buffer_bytes = kViewerSocketSendBytes;
     accept.max_frame_bytes = 64u << 10;  // viewers only send small control frames
   }
   return accept;

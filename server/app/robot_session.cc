@@ -103,6 +103,13 @@ void RobotSession::onMessage(std::string data, bool binary) {
       !problem.empty()) {
     return reject("invalid_message", problem, message->seq(), false);
   }
+  // Before the rate limit and the store: a refusal here takes no token and leaves nothing behind.
+  if (service_.memoryBound().exceeded()) {
+    metrics.messages_refused_memory.fetch_add(1, std::memory_order_relaxed);
+    return reject("resource_exhausted",
+                  service_.memoryBound().describe() + "; the message was not acknowledged, resend it later",
+                  message->seq(), false);
+  }
   if (!takeRateToken()) {
     return reject("rate_limited", "more than the allowed messages per second; resend later", message->seq(), false);
   }

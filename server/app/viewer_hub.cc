@@ -43,6 +43,16 @@ size_t ViewerHub::viewers() const {
   return viewers_.size();
 }
 
+ViewerBacklog ViewerHub::backlog() const {
+  std::lock_guard lock(mutex_);
+  ViewerBacklog backlog;
+  for (const auto& viewer : viewers_) {
+    backlog.skipping += viewer->needs_resync_;
+    backlog.queued_bytes += viewer->connection_->queuedBytes();
+  }
+  return backlog;
+}
+
 void ViewerHub::publishPose(const RobotPose& pose) {
   std::lock_guard lock(mutex_);
   latest_poses_[pose.robot_id] = pose;

@@ -41,6 +41,12 @@ class ViewerSession : public net::WsHandler, public std::enable_shared_from_this
   bool needs_resync_ = false;  ///< guarded by the hub's mutex
 };
 
+/// How far behind the viewers are, at one moment.
+struct ViewerBacklog {
+  size_t skipping = 0;      ///< viewers whose frames are skipped until they catch up
+  size_t queued_bytes = 0;  ///< queued to all viewers (each at most the hub's bound)
+};
+
 class ViewerHub {
  public:
   ViewerHub(Metrics& metrics, size_t max_queue_bytes);
@@ -48,6 +54,7 @@ class ViewerHub {
   void add(const std::shared_ptr<ViewerSession>& viewer);
   void remove(const ViewerSession* viewer);
   size_t viewers() const;
+  ViewerBacklog backlog() const;
 
   /// Keeps the latest pose of each robot for the next tick.
   void publishPose(const RobotPose& pose);

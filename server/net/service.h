@@ -68,6 +68,10 @@ struct WsAccept {
   size_t max_frame_bytes = 16u << 20;
   /// Bound of the send queue (see WsConnection::send).
   size_t max_send_queue_bytes = 8u << 20;
+  /// SO_SNDBUF of the connection's socket; 0 = the system's, autotuned (up to
+  /// megabytes). A small one keeps a stalled peer's backlog in the send queue,
+  /// where the application sees and bounds it, rather than in the kernel.
+  size_t socket_send_buffer_bytes = 0;
 };
 
 /// Implemented by the application. Methods run on the I/O threads and may be

@@ -60,6 +60,11 @@ class WsSession final : public Session, public WsDriver, public std::enable_shar
     // Messages go out as single frames; fragmenting buys nothing without
     // compression or interleaving.
     ws_.auto_fragment(false);
+    if (accept.socket_send_buffer_bytes != 0) {
+      beast::error_code ignored;  // the system's buffer is still a working one
+      beast::get_lowest_layer(ws_).set_option(
+          asio::socket_base::send_buffer_size(static_cast<int>(accept.socket_send_buffer_bytes)), ignored);
+    }
   }
 
   ~WsSession() override {

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "client/http_client.h"
+#include "client/metrics_sampler.h"
 #include "client/robot_client.h"
 #include "rmap/v1/map_api.pb.h"
 
@@ -49,9 +50,7 @@ auth:
 
 /// Value of an unlabelled metric in Prometheus text, -1 when absent.
 inline double metricValue(const std::string& text, const std::string& name) {
-  const std::string key = "\n" + name + " ";
-  const size_t at = text.find(key);
-  return at == std::string::npos ? -1.0 : std::stod(text.substr(at + key.size()));
+  return client::prometheusValue(text, name);
 }
 
 /// Streams messages as one robot and waits for every ack.

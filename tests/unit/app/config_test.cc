@@ -61,6 +61,7 @@ limits:
   max_frame_bytes: 1000
   max_points_per_cloud: 42
   max_messages_per_s_per_robot: 12.5
+  max_memory_bytes: 536870912
 maps:
   resolution_m: 0.05
   insert_threads: 3
@@ -87,6 +88,7 @@ maps:
   EXPECT_EQ(config.limits.max_frame_bytes, 1000u);
   EXPECT_EQ(config.limits.max_points_per_cloud, 42u);
   EXPECT_EQ(config.limits.max_messages_per_s_per_robot, 12.5);
+  EXPECT_EQ(config.limits.max_memory_bytes, 512u << 20);
   EXPECT_EQ(config.maps.resolution_m, 0.05);
   EXPECT_EQ(config.maps.insert_threads, 3);
   EXPECT_EQ(config.maps.occupancy.max_range_m, 30.0);
@@ -112,6 +114,7 @@ TEST(LoadConfigFile, AbsentKeysKeepTheirValues) {
   EXPECT_EQ(config.limits.max_frame_bytes, defaults.limits.max_frame_bytes);
   EXPECT_EQ(config.maps.resolution_m, defaults.maps.resolution_m);
   EXPECT_EQ(config.snapshot_interval_s, defaults.snapshot_interval_s);
+  EXPECT_EQ(config.limits.max_memory_bytes, 0u) << "no memory bound unless one is configured";
 }
 
 TEST(LoadConfigFile, BadRoleNamesTheFileAndTheRole) {
@@ -122,6 +125,8 @@ TEST(LoadConfigFile, BadRoleNamesTheFileAndTheRole) {
 TEST(LoadConfigFile, BadTypesThrowNamingTheFile) {
   EXPECT_NE(loadError("io_threads: many\n"), "");
   EXPECT_NE(loadError("limits:\n  max_frame_bytes: -1\n"), "");
+  EXPECT_NE(loadError("limits:\n  max_memory_bytes: -1\n"), "");
+  EXPECT_NE(loadError("limits:\n  max_memory_bytes: 2GiB\n"), "");
   EXPECT_NE(loadError("maps:\n  resolution_m: [1, 2]\n"), "");
   EXPECT_NE(loadError("auth:\n  tokens:\n    - {role: admin}\n"), "");
 }

@@ -99,6 +99,28 @@ TEST(RenderPrometheus, GaugesHaveTypeGaugeAndValue) {
   EXPECT_TRUE(hasLine(out, "rmap_map_memory_bytes 123456789")) << out;
 }
 
+TEST(RenderPrometheus, ReportsMemoryAndViewerBacklog) {
+  Metrics metrics;
+  metrics.messages_refused_memory = 4;
+  metrics.imports_refused_memory = 1;
+  MetricsGauges gauges;
+  gauges.resident_memory_bytes = 100u << 20;
+  gauges.resident_memory_peak_bytes = 120u << 20;
+  gauges.memory_bound_bytes = 512u << 20;
+  gauges.viewers_skipping = 3;
+  gauges.viewer_queue_bytes = 65536;
+  const std::string out = renderPrometheus(metrics, gauges);
+  EXPECT_TRUE(hasLine(out, "rmap_messages_refused_memory_total 4")) << out;
+  EXPECT_TRUE(hasLine(out, "rmap_imports_refused_memory_total 1")) << out;
+  EXPECT_TRUE(hasLine(out, "# TYPE rmap_resident_memory_bytes gauge")) << out;
+  EXPECT_TRUE(hasLine(out, "rmap_resident_memory_bytes 104857600")) << out;
+  EXPECT_TRUE(hasLine(out, "rmap_resident_memory_peak_bytes 125829120")) << out;
+  EXPECT_TRUE(hasLine(out, "rmap_memory_bound_bytes 536870912")) << out;
+  EXPECT_TRUE(hasLine(out, "rmap_viewers_skipping 3")) << out;
+  EXPECT_TRUE(hasLine(out, "rmap_viewer_queue_bytes 65536")) << out;
+  EXPECT_TRUE(hasLine(out, "rmap_viewer_tick_seconds_count 0")) << out;
+}
+
 TEST(RenderPrometheus, IncludesTheLatencyHistograms) {
   Metrics metrics;
   metrics.ack_latency.observe(0.00390625);  // 2^-8 s: exact in nanoseconds
@@ -129,7 +151,7 @@ TEST(RenderPrometheus, EveryMetricHasOneHelpAndOneTypeLine) {
   for (size_t at = out.find("# HELP "); at != std::string::npos; at = out.find("# HELP ", at + 1)) ++help;
   for (size_t at = out.find("# TYPE "); at != std::string::npos; at = out.find("# TYPE ", at + 1)) ++type;
   EXPECT_EQ(help, type);
-  EXPECT_EQ(help, 21u + 10u + 6u);  // counters, gauges, histograms
+  EXPECT_EQ(help, 23u + 15u + 7u);  // counters, gauges, histograms
 }
 
 }  // namespace

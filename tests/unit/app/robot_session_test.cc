@@ -125,5 +125,39 @@ TEST_F(RobotSessionTest, SeqAbove2To63IsRefusedAndOthersInItsBatchAreStored) {
   EXPECT_EQ(service_.store().messageCount(), 1u);
 }
 
+TEST(RobotSessionMemoryBound, AboveTheBoundDataIsRefusedUnstoredAndTheSessionStaysOpen) {
+  store::TempDir dir;
+  Config config = testing::configIn(dir.path());
+  config.limits.max_memory_bytes = 1;  // any process is above one byte
+  MappingService service(config);
+  auto connection = std::make_shared<RecordingConnection>();
+  auto session = std::make_shared<RobotSession>(service, Principal{Role::kAdmin, {}});
+  session->onOpen(connection);
+  v1::RobotMessage hello;
+  hello.mutable_hello()->set_robot_id("bot");
+  hello.mutable_hello()->set_map("lab");
+  session->onMessage(hello.SerializeAsString(), true);
+  session->onMessage(testing::smallCloud(1).SerializeAsString(), true);
+  session->onMessage(testing::smallCloud(2).SerializeAsString(), true);
+
+  const std::vector<v1::ServerMessage> sent = connection->waitFor(3);
+  ASSERT_EQ(sent.size(), 3u);
+  EXPECT_TRUE(sent[0].has_welcome()) << "a robot may still connect and learn its last durable seq";
+  for (uint64_t seq : {1u, 2u}) {
+    const v1::ServerMessage& reply = sent[seq];
+    ASSERT_TRUE(reply.has_error());
+    EXPECT_EQ(reply.error().code(), "resource_exhausted");
+    EXPECT_EQ(reply.error().seq(), seq);
+    EXPECT_FALSE(reply.error().fatal());
+    EXPECT_EQ(reply.error().message(),
+              "the server is above its memory bound of 9.537e-07 MiB; the message was not acknowledged, resend it later");
+  }
+  EXPECT_EQ(service.metrics().messages_refused_memory.load(), 2u);
+  EXPECT_EQ(service.metrics().messages_rejected.load(), 2u);
+  EXPECT_EQ(service.store().messageCount(), 0u);
+  EXPECT_EQ(service.findMap("lab")->map().stats().scans, 0u);
+  session->onClose();
+}
+
 }  // namespace
 }  // namespace rmap::app

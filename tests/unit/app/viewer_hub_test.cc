@@ -166,6 +166,19 @@ TEST_F(ViewerHubTest, ViewerBehindMissesFramesThenGetsResyncFirst) {
   EXPECT_EQ(fast.connection->frames.size(), 4u);
 }
 
+TEST_F(ViewerHubTest, BacklogCountsTheSkippedViewersAndTheQueuedBytes) {
+  const Viewer slow = open("lab"), fast = open("lab");
+  EXPECT_EQ(hub_.backlog().skipping, 0u);
+  slow.connection->queued = kQueueBound;
+  fast.connection->queued = 10;
+  hub_.publishEvent("lab", {{"n", 1}});
+  EXPECT_EQ(hub_.backlog().skipping, 1u);
+  EXPECT_EQ(hub_.backlog().queued_bytes, kQueueBound + 10);
+  slow.connection->queued = 0;
+  hub_.publishEvent("lab", {{"n", 2}});
+  EXPECT_EQ(hub_.backlog().skipping, 0u) << "caught up and resynchronised";
+}
+
 TEST_F(ViewerHubTest, FrameThatWouldOverflowTheQueueIsDropped) {
   const Viewer viewer = open("lab");
   viewer.connection->queued = kQueueBound - 10;
