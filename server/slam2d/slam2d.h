@@ -112,10 +112,12 @@ struct Slam2dOptions {
   /// (Cartographer-style double buffering), instead of the whole map: a
   /// sparse scan overlaps the map's older, drifted parts as much as the
   /// recent ones and was pulled onto doubled walls; returns to old places are
-  /// left to the loop closure. With loop closure on, corrected intel's ATE
-  /// went 0.22 → 0.07 m, belgioioso 0.16 → 0.07 (and loop_closure's sparse
-  /// submaps); csail 0.13 → 0.24 (see docs/BENCHMARKS.md §4). A trajectory
-  /// joining a shared map locks onto the whole map first. 0: off.
+  /// left to the loop closure. With loop closure on (and its sparse
+  /// submaps), corrected intel's ATE went 0.22 → 0.09 m, belgioioso 0.16 →
+  /// 0.09, but csail 0.13 → 0.23: it was held by re-locking onto old parts
+  /// (docs/BENCHMARKS.md §4, *Sparse logs*; 40–70 keyframes gave alike
+  /// figures, 10–30 worse). A trajectory joining a shared map locks onto the
+  /// whole map first. local_map_keyframes 0: off.
   double sparse_scan_motion_m = 0.3;
   int local_map_keyframes = 70;
   OccupancyUpdate occupancy;             ///< log-odds of hits and misses, clamping
