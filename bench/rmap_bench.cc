@@ -117,6 +117,14 @@ int main(int argc, char** argv) {
   d->add_option("--closure-reference", slam2d.closure_reference_path,
                 "corrected CARMEN log of the same run whose poses judge the closures (scans found by their ranges)");
   d->add_option("--submap-keyframes", slam2d.slam.loop_closure.submap_keyframes, "keyframes per loop-closure submap");
+  d->add_option("--local-map-keyframes", slam2d.slam.local_map_keyframes,
+                "a sparse trajectory's scans are matched against its newest keyframes only (this many at most; 0: the whole map)");
+  d->add_option("--sparse-scan-motion", slam2d.slam.sparse_scan_motion_m,
+                "mean motion between scans (m) from which a trajectory counts as sparse");
+  d->add_option("--sparse-raster-dilation", slam2d.slam.loop_closure.sparse_raster_dilation_cells,
+                "max filter radius (cells) of a sparse submap's loop-closure raster");
+  d->add_option("--sparse-min-score", slam2d.slam.loop_closure.sparse_min_score,
+                "correlative score a loop closure against a sparse submap needs");
   d->add_option("--loop-min-score", slam2d.slam.loop_closure.min_score, "correlative score a loop closure needs");
   d->add_option("--loop-ambiguity-margin", slam2d.slam.loop_closure.submap.ambiguity_margin,
                 "a loop match is ambiguous when a pose away from it scores within this margin (0: no check)");

@@ -42,6 +42,11 @@ void LoopClosureOptions::validate() const {
           "need 0 ≤ window_rad ≤ max_window_rad ≤ π and a growth ≥ 0");
   require(nonNegative(candidate_distance_m), "candidate_distance_m must be ≥ 0");
   require(min_score > 0.0 && min_score <= 1.0, "min_score must be in (0, 1]");
+  require(sparse_min_score > 0.0 && sparse_min_score <= 1.0, "sparse_min_score must be in (0, 1]");
+  require(nonNegative(sparse_keyframe_spacing_m), "sparse_keyframe_spacing_m must be ≥ 0");
+  require(sparse_raster_dilation_cells >= 0 && sparse_raster_dilation_cells <= 10 && submap.raster_dilation_cells >= 0 &&
+              submap.raster_dilation_cells <= 10,
+          "raster dilation must be in [0, 10] cells");
   require(nonNegative(small_correction_m) && nonNegative(small_correction_rad), "small_correction_* must be ≥ 0");
   require(support_keyframes >= 0, "support_keyframes must be ≥ 0");
   require(nonNegative(support_tolerance_m) && nonNegative(support_tolerance_rad), "support_tolerance_* must be ≥ 0");
@@ -92,14 +97,16 @@ bool LoopCloser::addKeyframe(std::vector<Keyframe>& keyframes) {
                     diagonalInformation(options_.sequential_sigma_m + options_.sequential_sigma_m_per_m * d,
                                         options_.sequential_sigma_rad + options_.sequential_sigma_rad_per_m * d),
                     false});
-    trajectory.travel_since_closure_m += step.translation().norm();
+    trajectory.travel_since_closure_m += d;
+    trajectory.travel_m += d;
   }
   if (!trajectory.last_keyframe || submaps_[trajectory.open_submap].finished) {
-    submaps_.push_back({kf.trajectory, {}, false});
+    submaps_.push_back({kf.trajectory, {}, false, trajectory.travel_m, trajectory.travel_m});
     trajectory.open_submap = submaps_.size() - 1;
   }
   SubmapInfo& open = submaps_[trajectory.open_submap];
   open.keyframes.push_back(q);
+  open.last_travel_m = trajectory.travel_m;
   if (static_cast<int>(open.keyframes.size()) >= options_.submap_keyframes) {
     open.finished = true;
     trajectory.finished_submaps.push_back(trajectory.open_submap);
@@ -179,8 +186,10 @@ void LoopCloser::search(std::vector<Keyframe>& keyframes, size_t query, Trajecto
     const size_t anchor = submaps_[s].anchor();
     const Pose2 center = between(keyframes[anchor].pose, kf.pose);
     ++stats_.searches;
+    const double min_score =
+        submaps_[s].sparse(options_.sparse_keyframe_spacing_m) ? options_.sparse_min_score : options_.min_score;
     const std::optional<SubmapMatch> m =
-        matcher(keyframes, s).match(kf.match_points, center, window_m, window_rad, options_.min_score);
+        matcher(keyframes, s).match(kf.match_points, center, window_m, window_rad, min_score);
     if (!m) continue;
     ++stats_.matches;
     stats_.ambiguous += m->ambiguous();
@@ -199,17 +208,37 @@ void LoopCloser::search(std::vector<Keyframe>& keyframes, size_t query, Trajecto
 
 const SubmapMatcher& LoopCloser::matcher(const std::vector<Keyframe>& keyframes, size_t submap) {
   for (auto it = cache_.begin(); it != cache_.end(); ++it) {
-    if (it->first != submap) continue;
+    if (it->submap != submap) continue;
     cache_.splice(cache_.begin(), cache_, it);
-    return *cache_.front().second;
+    return *cache_.front().matcher;
   }
   const SubmapInfo& info = submaps_[submap];
+  const Pose2& anchor = keyframes[info.anchor()].pose;
   std::vector<const Keyframe*> members;
-  for (size_t k : info.keyframes) members.push_back(&keyframes[k]);
-  cache_.emplace_front(submap, std::make_unique<SubmapMatcher>(members, keyframes[info.anchor()].pose, options_.submap));
+  std::vector<Pose2> relative;
+  for (size_t k : info.keyframes) {
+    members.push_back(&keyframes[k]);
+    relative.push_back(between(anchor, keyframes[k].pose));
+  }
+  SubmapMatcherOptions options = options_.submap;
+  if (info.sparse(options_.sparse_keyframe_spacing_m)) options.raster_dilation_cells = options_.sparse_raster_dilation_cells;
+  cache_.push_front({submap, std::move(relative), std::make_unique<SubmapMatcher>(members, anchor, options)});
   ++stats_.submaps_built;
   if (cache_.size() > static_cast<size_t>(options_.cached_submaps)) cache_.pop_back();
-  return *cache_.front().second;
+  return *cache_.front().matcher;
+}
+
+void LoopCloser::dropBentSubmaps(const std::vector<Keyframe>& keyframes) {
+  cache_.remove_if([&](const CachedSubmap& c) {
+    const SubmapInfo& info = submaps_[c.submap];
+    const Pose2& anchor = keyframes[info.anchor()].pose;
+    for (size_t i = 0; i < info.keyframes.size(); ++i) {
+      const Pose2 d = between(c.relative[i], between(anchor, keyframes[info.keyframes[i]].pose));
+      if (d.translation().norm() > options_.rerender_shift_m || std::abs(d.theta_rad) > options_.rerender_shift_rad)
+        return true;
+    }
+    return false;
+  });
 }
 
 Pose2 LoopCloser::correction(const Pending& p) const {
@@ -257,6 +286,7 @@ bool LoopCloser::optimize(std::vector<Keyframe>& keyframes) {
     moved = moved || d.translation().norm() > 1e-4 || std::abs(d.theta_rad) > 1e-5;
     keyframes[i].pose = p;
   }
+  if (moved) dropBentSubmaps(keyframes);
   stats_.optimization_s += secondsSince(t0);
   return usable && moved;
 }

@@ -56,6 +56,32 @@ ProbabilityRaster rasterFromGrid(const OccupancyGrid& grid, const Eigen::Aligned
   return raster;
 }
 
+ProbabilityRaster maxFiltered(const ProbabilityRaster& raster, int radius_cells) {
+  if (radius_cells < 0) throw std::invalid_argument("maxFiltered: radius_cells must be ≥ 0");
+  ProbabilityRaster out = raster;
+  if (radius_cells == 0) return out;
+  const auto at = [](const std::vector<float>& v, int width, int x, int y) -> float {
+    return v[static_cast<size_t>(y) * static_cast<size_t>(width) + static_cast<size_t>(x)];
+  };
+  // Separable: rows into `rows`, then columns of `rows` into out.p.
+  std::vector<float> rows(raster.p.size());
+  for (int y = 0; y < raster.height; ++y)
+    for (int x = 0; x < raster.width; ++x) {
+      float m = at(raster.p, raster.width, x, y);
+      for (int i = std::max(0, x - radius_cells); i <= std::min(raster.width - 1, x + radius_cells); ++i)
+        m = std::max(m, at(raster.p, raster.width, i, y));
+      rows[static_cast<size_t>(y) * static_cast<size_t>(raster.width) + static_cast<size_t>(x)] = m;
+    }
+  for (int y = 0; y < raster.height; ++y)
+    for (int x = 0; x < raster.width; ++x) {
+      float m = at(rows, raster.width, x, y);
+      for (int j = std::max(0, y - radius_cells); j <= std::min(raster.height - 1, y + radius_cells); ++j)
+        m = std::max(m, at(rows, raster.width, x, j));
+      out.p[static_cast<size_t>(y) * static_cast<size_t>(raster.width) + static_cast<size_t>(x)] = m;
+    }
+  return out;
+}
+
 ProbabilityRaster rasterFromScans(std::span<const PosedScan> scans, double resolution_m, float unknown_p,
                                   const OccupancyUpdate& update, double max_ray_m, int margin_cells) {
   checkUnknown(unknown_p);

@@ -60,6 +60,13 @@ struct ProbabilityRaster {
 /// @throws std::invalid_argument for an empty box or `unknown_p` outside [0, 1]
 ProbabilityRaster rasterFromGrid(const OccupancyGrid& grid, const Eigen::AlignedBox2i& cells, float unknown_p);
 
+/// The raster with each cell replaced by the largest value within
+/// ±radius_cells along x and y (a square max filter; radius 0: a copy), so a
+/// wall seen from few poses is as thick as the endpoint scatter of another
+/// view of it.
+/// @throws std::invalid_argument for a negative radius
+ProbabilityRaster maxFiltered(const ProbabilityRaster& raster, int radius_cells);
+
 /// One scan for rasterFromScans: endpoints in the robot frame (m) and the
 /// robot pose in the map frame; the sensor sits at the robot origin.
 struct PosedScan {

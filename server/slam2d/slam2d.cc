@@ -58,6 +58,8 @@ void Slam2dOptions::validate() const {
               relock_search_m >= 0.0 && relock_search_m <= 5.0,
           "relock_residual_margin must be finite, relock_search_rad in [0, 3.2], relock_search_m in [0, 5] m");
   require(search_odometry_step_m >= 0.0 && search_odometry_step_rad >= 0.0, "search odometry step thresholds must be ≥ 0");
+  require(local_map_keyframes >= 0, "local_map_keyframes must be ≥ 0");
+  require(sparse_scan_motion_m >= 0.0 && std::isfinite(sparse_scan_motion_m), "sparse_scan_motion_m must be ≥ 0");
   require(match_point_spacing_m >= 0.0 && std::isfinite(match_point_spacing_m), "match_point_spacing_m must be ≥ 0");
   require(occupancy.hit_log_odds > 0.0f && occupancy.miss_log_odds < 0.0f &&
               occupancy.min_log_odds < 0.0f && occupancy.max_log_odds > 0.0f,
@@ -184,6 +186,7 @@ Pose2 Slam2d::addScan(const std::string& trajectory, const LaserScan& scan, cons
   if (!is_new) predicted = track.pose * (odometry_step ? between(*track.odometry, *odometry) : track.last_increment);
 
   Pose2 estimate = predicted;
+  const GridMap2d& match_map = is_new ? map_ : matchingMap(track.index);  // a joining robot locks onto the whole map
   if (!is_new && !points.empty() && !map_.empty()) {
     std::optional<PosePrior> prior;
     if (odometry_step)
@@ -197,7 +200,7 @@ Pose2 Slam2d::addScan(const std::string& trajectory, const LaserScan& scan, cons
       matcher.search_rad = options_.search_without_odometry_rad;
       matcher.search_m = odometry_step ? options_.search_after_large_step_m : options_.search_without_odometry_m;
     }
-    MatchResult match = matchScan(map_, points, predicted, prior, matcher);
+    MatchResult match = matchScan(match_map, points, predicted, prior, matcher);
     if (!search && options_.relock_residual_margin > 0.0 && track.match_residual &&
         match.mean_residual > *track.match_residual + options_.relock_residual_margin) {
       // A poor fit for this trajectory: Gauss–Newton may sit in a wrong basin
@@ -205,7 +208,7 @@ Pose2 Slam2d::addScan(const std::string& trajectory, const LaserScan& scan, cons
       // around the prediction.
       matcher.search_rad = options_.relock_search_rad;
       matcher.search_m = options_.relock_search_m;
-      const MatchResult searched = matchScan(map_, points, predicted, prior, matcher);
+      const MatchResult searched = matchScan(match_map, points, predicted, prior, matcher);
       // Only a fit as good as the recent ones counts as re-locked: a search
       // that merely lowers a poor residual (new ground, a corridor) slid the
       // raw mit-csail run off the map (ATE vs its corrected subset 1.2 → 13 m).
@@ -224,6 +227,12 @@ Pose2 Slam2d::addScan(const std::string& trajectory, const LaserScan& scan, cons
   if (!estimate.isFinite() || std::abs(estimate.x_m) > kMaxCoordinate_m || std::abs(estimate.y_m) > kMaxCoordinate_m)
     estimate = predicted;
 
+  if (!is_new) {
+    const double motion = between(track.pose, estimate).translation().norm();
+    track.scan_motion_m =
+        track.scan_motion_m ? (1.0 - kResidualRate) * *track.scan_motion_m + kResidualRate * motion : motion;
+  }
+  const bool sparse = track.scan_motion_m && *track.scan_motion_m >= options_.sparse_scan_motion_m;
   const Pose2 moved = between(track.last_update_pose, estimate);
   const bool update = is_new || map_.empty() || moved.translation().norm() >= options_.map_update_distance_m ||
                       std::abs(moved.theta_rad) >= options_.map_update_angle_rad;
@@ -231,6 +240,7 @@ Pose2 Slam2d::addScan(const std::string& trajectory, const LaserScan& scan, cons
     track.index = names_.size();
     names_.push_back(trajectory);
     scans_.emplace_back();
+    local_maps_.emplace_back();
   }
   bool keyframe_added = false;
   if (update && !beams.empty()) {
@@ -261,6 +271,10 @@ Pose2 Slam2d::addScan(const std::string& trajectory, const LaserScan& scan, cons
     }
     track.last_update_pose = estimate;
     ++version_;
+    if (options_.local_map_keyframes > 0 && sparse)
+      addToLocalMaps(kf, keyframes_.size(), calibration);
+    else
+      local_maps_[track.index].clear();
     if (loop_closer_) {
       const double loop_spacing2 = std::pow(options_.loop_closure.match_point_spacing_m, 2);
       for (const MatchPoint& p : points)
@@ -315,14 +329,41 @@ void Slam2d::applyCorrection(const std::vector<std::pair<Pose2, Pose2>>& relativ
   for (size_t i = 0; i < keyframes_.size(); ++i) rendered_[i] = keyframes_[i].pose;
   GridMap2d map(options_.resolution_m, options_.levels);
   for (const Keyframe& kf : keyframes_) {
-    const auto model = kf.model.empty() ? models_.end() : models_.find(kf.model);
-    const IntensityCalibration* calibration =
-        model != models_.end() && model->second.calibration ? &*model->second.calibration : nullptr;
-    insertKeyframe(map, kf, kf.pose, calibration, options_.occupancy);
+    insertKeyframe(map, kf, kf.pose, calibrationOf(kf), options_.occupancy);
   }
   map_ = std::move(map);
+  for (std::deque<LocalMap>& maps : local_maps_)
+    for (LocalMap& local : maps) {
+      local.grid = GridMap2d(options_.resolution_m, options_.levels);
+      for (size_t k : local.keyframes)
+        insertKeyframe(local.grid, keyframes_[k], keyframes_[k].pose, calibrationOf(keyframes_[k]), options_.occupancy);
+    }
   ++version_;
   ++graph_version_;
+}
+
+const IntensityCalibration* Slam2d::calibrationOf(const Keyframe& kf) const {
+  return kf.model.empty() ? nullptr : calibration(kf.model);
+}
+
+void Slam2d::addToLocalMaps(const Keyframe& kf, size_t k, const IntensityCalibration* calibration) {
+  std::deque<LocalMap>& maps = local_maps_[kf.trajectory];
+  if (maps.empty()) maps.push_back({GridMap2d(options_.resolution_m, options_.levels), {}});
+  for (LocalMap& local : maps) {
+    insertKeyframe(local.grid, kf, kf.pose, calibration, options_.occupancy);
+    local.keyframes.push_back(k);
+  }
+  const size_t full = static_cast<size_t>(options_.local_map_keyframes);
+  if (maps.front().keyframes.size() >= full && maps.size() > 1) maps.pop_front();
+  if (maps.back().keyframes.size() >= std::max<size_t>(1, full / 2))
+    maps.push_back({GridMap2d(options_.resolution_m, options_.levels), {}});
+}
+
+const GridMap2d& Slam2d::matchingMap(size_t index) const {
+  // A local map is used once it holds half its keyframes (from then on the front one always does).
+  const std::deque<LocalMap>& maps = local_maps_[index];
+  const size_t half = std::max<size_t>(1, static_cast<size_t>(options_.local_map_keyframes) / 2);
+  return !maps.empty() && maps.front().keyframes.size() >= half && !maps.front().grid.empty() ? maps.front().grid : map_;
 }
 
 std::vector<LoopClosure2d> Slam2d::takeLoopClosures() {

@@ -25,6 +25,7 @@
 /// ρ = 0.5, see self_calibration.h).
 
 #include <cstdint>
+#include <deque>
 #include <memory>
 #include <optional>
 #include <string>
@@ -103,6 +104,22 @@ struct Slam2dOptions {
   double relock_residual_margin = 0.02;
   double relock_search_rad = 0.2;
   double relock_search_m = 0.2;
+  /// Sparse trajectories: a trajectory whose scans are on average (running
+  /// mean over ≈ 10 scans) sparse_scan_motion_m or more apart — logs that
+  /// keep one scan per ≈ 1 m or 0.5 rad, as the corrected logs do; raw logs
+  /// move ≤ 0.1 m per scan — is matched against a local map of its own
+  /// newest keyframes, between half local_map_keyframes and that many
+  /// (Cartographer-style double buffering), instead of the whole map: a
+  /// sparse scan overlaps the map's older, drifted parts as much as the
+  /// recent ones and was pulled onto doubled walls; returns to old places are
+  /// left to the loop closure. With loop closure on (and its sparse
+  /// submaps), corrected intel's ATE went 0.22 → 0.09 m, belgioioso 0.16 →
+  /// 0.09, but csail 0.13 → 0.23: it was held by re-locking onto old parts
+  /// (docs/BENCHMARKS.md §4, *Sparse logs*; 40–70 keyframes gave alike
+  /// figures, 10–30 worse). A trajectory joining a shared map locks onto the
+  /// whole map first. local_map_keyframes 0: off.
+  double sparse_scan_motion_m = 0.3;
+  int local_map_keyframes = 70;
   OccupancyUpdate occupancy;             ///< log-odds of hits and misses, clamping
   ScanMatcherOptions matcher;            ///< iterations, damping, step bounds (reflectivity weight set from above)
   IncidenceOptions incidence;            ///< per-beam incidence for the calibration
@@ -174,6 +191,7 @@ class Slam2d {
     Pose2 last_increment;           ///< motion of the last scan, the prediction without odometry
     Pose2 last_update_pose;         ///< pose at the last map update
     std::optional<double> match_residual;  ///< running mean of the matches' mean residual (see relock_*)
+    std::optional<double> scan_motion_m;   ///< running mean of the translation between scans (see sparse_scan_motion_m)
     size_t index = 0;                      ///< into names_ and scans_
     std::optional<size_t> keyframe;        ///< its newest keyframe
   };
@@ -183,6 +201,12 @@ class Slam2d {
     int64_t stamp_ns = 0;
     std::optional<size_t> keyframe;
     Pose2 relative;
+  };
+
+  /// One trajectory's local matching map (see Slam2dOptions::local_map_keyframes).
+  struct LocalMap {
+    GridMap2d grid;
+    std::vector<size_t> keyframes;  ///< indices into keyframes_, for re-rendering
   };
 
   struct ScannerModel {
@@ -196,6 +220,12 @@ class Slam2d {
   /// After the graph moved keyframes: the map is rendered again from them and
   /// every trajectory's pose follows its newest keyframe.
   void applyCorrection(const std::vector<std::pair<Pose2, Pose2>>& relative_to_keyframe);
+  /// Adds `keyframe` (to be keyframes_[k]) to its trajectory's local maps,
+  /// starting and dropping maps as they fill.
+  void addToLocalMaps(const Keyframe& keyframe, size_t k, const IntensityCalibration* calibration);
+  /// The map a scan of trajectory `index` is matched against.
+  const GridMap2d& matchingMap(size_t index) const;
+  const IntensityCalibration* calibrationOf(const Keyframe& keyframe) const;
 
   Slam2dOptions options_;
   GridMap2d map_;
@@ -205,6 +235,7 @@ class Slam2d {
   std::vector<std::vector<ScanRecord>> scans_;  ///< by trajectory index
   /// Every map update's scan; without loop closure only stamp, pose and trajectory are kept.
   std::vector<Keyframe> keyframes_;
+  std::vector<std::deque<LocalMap>> local_maps_;  ///< by trajectory index, the front one matched
   std::vector<Pose2> rendered_;  ///< per keyframe, the pose the map holds it at (loop closure only)
   std::unique_ptr<LoopCloser> loop_closer_;
   uint64_t version_ = 0;

@@ -13,7 +13,8 @@ SubmapMatcher::SubmapMatcher(std::span<const Keyframe* const> keyframes, const P
   const Pose2 to_anchor = anchor_pose.inverse();
   for (const Keyframe* k : keyframes) insertKeyframe(grid_, *k, to_anchor * k->pose, nullptr, options_.occupancy);
   if (grid_.empty()) throw std::invalid_argument("SubmapMatcher: the keyframes observe no cell");
-  correlative_.emplace(rasterFromGrid(grid_.level(0), grid_.knownCells(), options_.unknown_probability),
+  correlative_.emplace(maxFiltered(rasterFromGrid(grid_.level(0), grid_.knownCells(), options_.unknown_probability),
+                                   options_.raster_dilation_cells),
                        options_.correlative);
   options_.refinement.search_rad = 0.0;
   options_.refinement.search_m = 0.0;

@@ -39,6 +39,7 @@ struct SubmapMatcherOptions {
   double resolution_m = 0.05;
   int levels = 2;                 ///< occupancy pyramid levels for the refinement
   float unknown_probability = 0.1f;  ///< raster value of never-observed cells
+  int raster_dilation_cells = 0;     ///< radius of the correlative raster's max filter (see maxFiltered)
   OccupancyUpdate occupancy;
   CorrelativeMatcherOptions correlative;
   ScanMatcherOptions refinement;  ///< its search fields are ignored

@@ -130,6 +130,9 @@ TEST(LoopClosureOptions, BadOptionsThrow) {
   throws([](LoopClosureOptions& o) { o.ambiguous_sigma_along_m = o.loop_sigma_m / 2; });
   throws([](LoopClosureOptions& o) { o.submap.ambiguity_window_m = -1.0; });
   throws([](LoopClosureOptions& o) { o.submap.ambiguity_margin = NAN; });
+  throws([](LoopClosureOptions& o) { o.sparse_min_score = 0.0; });
+  throws([](LoopClosureOptions& o) { o.sparse_keyframe_spacing_m = -0.1; });
+  throws([](LoopClosureOptions& o) { o.sparse_raster_dilation_cells = -1; });
   // Off, options are still checked: turning it on later must not be the first time they are.
   throws([](LoopClosureOptions& o) {
     o.enabled = false;

@@ -27,6 +27,33 @@ TEST(ProbabilityRaster, CellsAreFlooredFromTheOriginAndOutsideReadsOutsideP) {
   EXPECT_FLOAT_EQ(raster.at(0, -1), 0.05f);
 }
 
+TEST(ProbabilityRaster, MaxFilterThickensAPeakWithinItsRadiusOnly) {
+  ProbabilityRaster raster;
+  raster.origin_m = {0.0, 0.0};
+  raster.resolution_m = 0.1;
+  raster.width = 5;
+  raster.height = 4;
+  raster.p.assign(20, 0.1f);
+  raster.p[1 * 5 + 2] = 0.9f;  // (2, 1)
+  raster.p[3 * 5 + 4] = 0.4f;  // (4, 3), a corner
+  raster.outside_p = 0.1f;
+  const ProbabilityRaster once = maxFiltered(raster, 1);
+  EXPECT_EQ(once.width, 5);
+  EXPECT_EQ(once.height, 4);
+  EXPECT_EQ(once.origin_m, raster.origin_m);
+  for (int y = 0; y < 4; ++y)
+    for (int x = 0; x < 5; ++x) {
+      float expected = 0.1f;
+      if (std::abs(x - 4) <= 1 && std::abs(y - 3) <= 1) expected = 0.4f;
+      if (std::abs(x - 2) <= 1 && std::abs(y - 1) <= 1) expected = 0.9f;
+      EXPECT_FLOAT_EQ(once.at(x, y), expected) << x << "," << y;
+    }
+  EXPECT_EQ(maxFiltered(raster, 0).p, raster.p);
+  EXPECT_FLOAT_EQ(maxFiltered(raster, 2).at(0, 3), 0.9f);
+  EXPECT_FLOAT_EQ(maxFiltered(raster, 2).at(4, 0), 0.9f);
+  EXPECT_THROW(maxFiltered(raster, -1), std::invalid_argument);
+}
+
 TEST(ProbabilityRaster, ValidateNamesTheBrokenInvariant) {
   ProbabilityRaster raster;
   raster.width = 2;
