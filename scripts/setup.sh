@@ -19,6 +19,7 @@ packages=(
   python3-protobuf python3-websockets  # the Python client (clients/python) and its tests
   python3-yaml  # tests/docker checks docker/compose.yaml
   openssl  # tests/integration/tls_test.cc makes its self-signed certificates with the openssl command
+  clang libclang-rt-14-dev  # the libFuzzer targets (tests/fuzz, scripts/fuzz.sh): clang and its fuzzer runtime
 )
 # Node.js and npm fetch and test the viewer. Debian's packages only when there is no npm:
 # over a NodeSource nodejs (which ships its own npm) they would conflict.

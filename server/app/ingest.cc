@@ -1,5 +1,6 @@
 #include "app/ingest.h"
 
+#include <climits>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -160,6 +161,30 @@ std::string checkDataMessage(const v1::RobotMessage& message, const LimitsConfig
     case v1::RobotMessage::BODY_NOT_SET: break;
   }
   return "message has no body";
+}
+
+RobotFrame decodeRobotFrame(std::string_view data, bool binary, const map3d::Grid* grid, const LimitsConfig& limits) {
+  const auto refuse = [](const char* code, std::string problem, uint64_t seq, bool fatal) {
+    return RobotFrame{nullptr, code, std::move(problem), seq, fatal};
+  };
+  if (!binary) return refuse("invalid_message", "robot frames must be binary protobuf RobotMessage", 0, false);
+  auto message = std::make_shared<v1::RobotMessage>();
+  if (data.size() > static_cast<size_t>(INT_MAX) ||
+      !message->ParseFromArray(data.data(), static_cast<int>(data.size()))) {
+    return refuse("invalid_message", "the frame is not a valid rmap.v1.RobotMessage", 0, false);
+  }
+  const uint64_t seq = message->seq();
+  if (!grid) {
+    if (message->body_case() != v1::RobotMessage::kHello) {
+      return refuse("hello_required", "the first message of a robot stream must be Hello", seq, true);
+    }
+    if (std::string problem = checkHello(message->hello()); !problem.empty()) {
+      return refuse("invalid_hello", std::move(problem), 0, true);
+    }
+  } else if (std::string problem = checkDataMessage(*message, limits, *grid); !problem.empty()) {
+    return refuse("invalid_message", std::move(problem), seq, false);
+  }
+  return RobotFrame{std::move(message), {}, {}, seq, false};
 }
 
 Eigen::Isometry3d toIsometry(const v1::Pose3& pose) {

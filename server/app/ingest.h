@@ -5,7 +5,10 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <cstdint>
+#include <memory>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "app/config.h"
@@ -29,6 +32,21 @@ std::string checkHello(const v1::Hello& hello);
 /// consistent sizes, known encodings, a cloud origin inside `grid`'s cells.
 /// @return what is wrong, empty when the message is valid
 std::string checkDataMessage(const v1::RobotMessage& message, const LimitsConfig& limits, const map3d::Grid& grid);
+
+/// A received robot frame: the checked message, or the Error refusing it
+/// (docs/API.md §5: code, text, the seq of a message that parsed, fatal).
+struct RobotFrame {
+  std::shared_ptr<v1::RobotMessage> message;  ///< null when refused
+  std::string code;                           ///< invalid_message, hello_required or invalid_hello
+  std::string problem;
+  uint64_t seq = 0;
+  bool fatal = false;
+};
+
+/// What a robot stream does with every frame before acting on it: parses it
+/// as a RobotMessage, then checks it as the stream's Hello while `grid` is
+/// null (no map yet), else as a data message for the map of `grid`.
+RobotFrame decodeRobotFrame(std::string_view data, bool binary, const map3d::Grid* grid, const LimitsConfig& limits);
 
 /// A pose message as a rigid transform; an all-zero quaternion is identity.
 Eigen::Isometry3d toIsometry(const v1::Pose3& pose);

@@ -9,6 +9,7 @@
 
 #include "app/config.h"
 #include "app/mapping_service.h"
+#include "app/protobuf_log.h"
 #include "app/rmapd_service.h"
 #include "app/static_files.h"
 #include "net/server.h"
@@ -71,6 +72,7 @@ int main(int argc, char** argv) {
   // Logs go to stderr: stdout carries only the machine-readable "listening on" line.
   spdlog::set_default_logger(spdlog::stderr_color_mt("rmapd"));
   spdlog::set_level(spdlog::level::from_str(config.log_level));
+  rmap::app::routeProtobufLogToSpdlog();
 
   // Block the stop signals before any thread starts so only sigwait sees them.
   sigset_t signals;

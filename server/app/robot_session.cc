@@ -88,41 +88,26 @@ void RobotSession::onMessage(std::string data, bool binary) {
     metrics.messages_rejected.fetch_add(1, std::memory_order_relaxed);
     sendError(code, text, seq, fatal);
   };
-  if (!binary) return reject("invalid_message", "robot frames must be binary protobuf RobotMessage", 0, false);
-  auto message = std::make_shared<v1::RobotMessage>();
-  if (!message->ParseFromString(data)) {
-    return reject("invalid_message", "the frame is not a valid rmap.v1.RobotMessage", 0, false);
-  }
-  if (robot_id_.empty()) {
-    if (message->body_case() != v1::RobotMessage::kHello) {
-      return reject("hello_required", "the first message of a robot stream must be Hello", message->seq(), true);
-    }
-    return handleHello(message->hello());
-  }
-  if (const std::string problem = checkDataMessage(*message, service_.config().limits, map_->map().grid());
-      !problem.empty()) {
-    return reject("invalid_message", problem, message->seq(), false);
-  }
+  const RobotFrame frame = decodeRobotFrame(data, binary, robot_id_.empty() ? nullptr : &map_->map().grid(),
+                                            service_.config().limits);
+  if (!frame.message) return reject(frame.code, frame.problem, frame.seq, frame.fatal);
+  if (robot_id_.empty()) return handleHello(frame.message->hello());
   // Before the rate limit and the store: a refusal here takes no token and leaves nothing behind.
   if (service_.memoryBound().exceeded()) {
     metrics.messages_refused_memory.fetch_add(1, std::memory_order_relaxed);
     return reject("resource_exhausted",
                   service_.memoryBound().describe() + "; the message was not acknowledged, resend it later",
-                  message->seq(), false);
+                  frame.message->seq(), false);
   }
   if (!takeRateToken()) {
-    return reject("rate_limited", "more than the allowed messages per second; resend later", message->seq(), false);
+    return reject("rate_limited", "more than the allowed messages per second; resend later", frame.message->seq(), false);
   }
   last_seen_ns_.store(nowNs(), std::memory_order_relaxed);
-  handleData(std::move(data), std::move(message), received);
+  handleData(std::move(data), frame.message, received);
 }
 
 void RobotSession::handleHello(const v1::Hello& hello) {
   Metrics& metrics = service_.metrics();
-  if (const std::string problem = checkHello(hello); !problem.empty()) {
-    metrics.messages_rejected.fetch_add(1, std::memory_order_relaxed);
-    return sendError("invalid_hello", problem, 0, true);
-  }
   if (principal_.role == Role::kViewer) {
     metrics.messages_rejected.fetch_add(1, std::memory_order_relaxed);
     return sendError("permission_denied", "a viewer token cannot stream robot data", 0, true);

@@ -540,7 +540,8 @@ void CuboidMap::forEachKnownCell(const std::function<void(const CellKey&, float)
   std::shared_lock lock(mutex_);
   for (const auto& [key, block] : blocks_) {
     if (block->dense) {
-      block->dense->known.forEach([&](int i) { fn(cellOf(key, i), block->dense->log_odds[i]); });
+      // Named captures: clang before 16 cannot capture structured bindings implicitly.
+      block->dense->known.forEach([&fn, &key = key, &block = block](int i) { fn(cellOf(key, i), block->dense->log_odds[i]); });
       continue;
     }
     for (const PackedCuboid& c : block->cuboids) {

@@ -7,8 +7,6 @@
 #include <boost/beast/core/bind_handler.hpp>
 #include <boost/beast/core/flat_buffer.hpp>
 #include <boost/beast/core/stream_traits.hpp>
-#include <boost/beast/core/string.hpp>
-#include <boost/beast/http/rfc7230.hpp>
 #include <boost/beast/http/parser.hpp>
 #include <boost/beast/http/read.hpp>
 #include <boost/beast/http/write.hpp>
@@ -16,12 +14,12 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdint>
-#include <iterator>
 #include <limits>
 #include <optional>
 #include <string>
 #include <string_view>
 
+#include "net/header_checks.h"
 #include "net/json_error.h"
 #include "net/peer.h"
 #include "net/ws_handshake.h"
@@ -47,45 +45,6 @@ void finalize(Response& response, unsigned version, bool request_keep_alive) {
   response.keep_alive(request_keep_alive && response.keep_alive());
   if (response.find(http::field::server) == response.end()) response.set(http::field::server, "rmapd");
   if (!response.has_content_length() && !response.chunked()) response.prepare_payload();
-}
-
-/// Why a request whose header parsed cannot be served, as the error that
-/// answers it (the connection then closes), or nullopt.
-/// - Host: HTTP/1.1 requires exactly one, and no version allows two
-///   (RFC 9112 §3.2).
-/// - Transfer-Encoding: a body length that two parties may judge differently
-///   is how requests are smuggled past a proxy. Beast rejects it next to a
-///   Content-Length, but takes a request whose last coding is not chunked
-///   as having no body, so its body would be read as the next request
-///   (RFC 9112 §6.1 asks for a 400); HTTP/1.0 has no Transfer-Encoding; and
-///   only chunked is decoded, so other codings get 501 rather than reaching
-///   the Service still encoded.
-/// - Expect: only 100-continue is known (RFC 9110 §10.1.1); HTTP/1.0 servers
-///   ignore the field.
-std::optional<Response> headerError(const Request& request, bool chunked) {
-  const unsigned version = request.version();
-  const size_t hosts = request.count(http::field::host);
-  if (hosts > 1 || (hosts == 0 && version >= 11)) {
-    return jsonError(http::status::bad_request, "bad_request", "an HTTP/1.1 request needs exactly one Host field",
-                     version);
-  }
-  if (const size_t codings = request.count(http::field::transfer_encoding); codings > 0) {
-    if (version < 11 || !chunked) {
-      return jsonError(http::status::bad_request, "bad_request",
-                       "Transfer-Encoding needs HTTP/1.1 and chunked as the last coding", version);
-    }
-    const http::token_list list{request[http::field::transfer_encoding]};
-    if (codings > 1 || std::next(list.begin()) != list.end()) {
-      return jsonError(http::status::not_implemented, "not_implemented", "the only transfer coding served is chunked",
-                       version);
-    }
-  }
-  const auto expect = request.find(http::field::expect);
-  if (version >= 11 && expect != request.end() && !beast::iequals(expect->value(), "100-continue")) {
-    return jsonError(http::status::expectation_failed, "expectation_failed", "only 100-continue is supported",
-                     version);
-  }
-  return std::nullopt;
 }
 
 /// The interim answer a client sending Expect: 100-continue waits for

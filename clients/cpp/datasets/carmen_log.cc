@@ -169,6 +169,8 @@ int64_t parseCarmenStampNs(std::string_view field, const std::string& source, si
   if (!whole.empty() && whole.size() <= 10 && digits(whole) && digits(fraction)) {
     int64_t ns = 0;
     for (char c : whole) ns = ns * 10 + (c - '0');
+    // The range of the other forms; ten digits could reach 1e10 s, beyond int64 nanoseconds.
+    if (ns >= 9'000'000'000) throwAt(source, line, "timestamp out of range \"" + std::string(field) + "\"");
     int64_t frac_ns = 0, scale = 100000000;
     for (char c : fraction.substr(0, 9)) {  // digits below 1 ns are dropped
       frac_ns += (c - '0') * scale;

@@ -1,6 +1,7 @@
 #include "datasets/ply_cloud.h"
 
 #include <bit>
+#include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <iterator>
@@ -105,8 +106,9 @@ PlyCloud parsePlyCloud(std::string_view content, const std::string& source) {
     } else if (f[0] == "element") {
       if (n != 3) throwAt(source, lines.number(), "element needs a name and a count");
       const double count = parseNumber(f[2], source, lines.number());
-      if (!(count >= 0) || count != static_cast<double>(static_cast<size_t>(count))) {
-        throwAt(source, lines.number(), "element count must be a whole number ≥ 0");
+      // Checked below 2^64 before the cast: a larger count does not convert.
+      if (!(count >= 0 && count < 0x1p64) || count != std::floor(count)) {
+        throwAt(source, lines.number(), "element count must be a whole number in [0, 2^64)");
       }
       elements.push_back({std::string(f[1]), static_cast<size_t>(count), {}});
     } else if (f[0] == "property") {
@@ -146,6 +148,31 @@ PlyCloud parsePlyCloud(std::string_view content, const std::string& source) {
     if (xyz[a] < 0) fail(std::string("vertex has no property '") + "xyz"[a] + "'");
   }
 
+  // The data starts right after the end_header line. Its size bounds the vertex count before
+  // memory is taken for the vertices: binary ones take their stride, ascii ones a line of at
+  // least two characters (the last one may lack its '\n'; short lines are refused below).
+  size_t pos = lines.offset();
+  if (format == Format::kAscii) {
+    if (vertex.count > (content.size() - pos + 1) / 2) {
+      fail("header declares " + std::to_string(vertex.count) + " vertices, more than the " +
+           std::to_string(content.size() - pos) + " bytes of ascii data can hold");
+    }
+  } else {
+    // Binary: the elements before the vertices are skipped, each checked against the data left.
+    for (size_t e = 0; e <= vertex_index; ++e) {
+      size_t stride = 0;
+      for (const Property& p : elements[e].properties) {
+        if (p.list) fail("element '" + elements[e].name + "' before the vertices has a list property (binary)");
+        stride += sizeOf(p.type);
+      }
+      if ((content.size() - pos) / std::max<size_t>(stride, 1) < elements[e].count) {
+        fail("binary data ends in element '" + elements[e].name + "' (" + std::to_string(elements[e].count) +
+             " × " + std::to_string(stride) + " bytes declared)");
+      }
+      if (e != vertex_index) pos += stride * elements[e].count;
+    }
+  }
+
   PlyCloud cloud;
   cloud.points_m.resize(vertex.count);
   std::vector<std::vector<float>*> columns(vertex.properties.size(), nullptr);
@@ -179,31 +206,11 @@ PlyCloud parsePlyCloud(std::string_view content, const std::string& source) {
     return cloud;
   }
 
-  // Binary: the data starts right after the "end_header" line's '\n'.
-  const size_t header_end = content.find("\nend_header");
-  size_t pos = content.find('\n', header_end + 1);
-  if (pos == std::string_view::npos) fail("no data after end_header");
-  ++pos;
   const bool swap = (format == Format::kBinaryLittle) != (std::endian::native == std::endian::little);
-  for (size_t e = 0; e <= vertex_index; ++e) {
-    size_t stride = 0;
-    for (const Property& p : elements[e].properties) {
-      if (p.list) fail("element '" + elements[e].name + "' before the vertices has a list property (binary)");
-      stride += sizeOf(p.type);
-    }
-    if ((content.size() - pos) / std::max<size_t>(stride, 1) < elements[e].count) {
-      fail("binary data ends in element '" + elements[e].name + "' (" + std::to_string(elements[e].count) + " × " +
-           std::to_string(stride) + " bytes declared)");
-    }
-    if (e != vertex_index) {
-      pos += stride * elements[e].count;
-      continue;
-    }
-    for (size_t k = 0; k < vertex.count; ++k) {
-      for (size_t i = 0; i < vertex.properties.size(); ++i) {
-        store(k, i, decode(content.data() + pos, vertex.properties[i].type, swap));
-        pos += sizeOf(vertex.properties[i].type);
-      }
+  for (size_t k = 0; k < vertex.count; ++k) {
+    for (size_t i = 0; i < vertex.properties.size(); ++i) {
+      store(k, i, decode(content.data() + pos, vertex.properties[i].type, swap));
+      pos += sizeOf(vertex.properties[i].type);
     }
   }
   return cloud;

@@ -3,6 +3,7 @@
 /// Line and number scanning shared by the text dataset readers, with errors
 /// that name the source and the line.
 
+#include <algorithm>
 #include <cstddef>
 #include <string>
 #include <string_view>
@@ -19,6 +20,9 @@ class TextLines {
 
   /// 1-based number of the line last returned by next().
   size_t number() const { return number_; }
+
+  /// Offset of the first byte after the line last returned and its '\n'.
+  size_t offset() const { return std::min(pos_, text_.size()); }
 
  private:
   std::string_view text_;

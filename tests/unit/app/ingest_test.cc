@@ -285,6 +285,48 @@ TEST(CheckCloud, RefusesASensorOriginOutsideTheAddressableRange) {
   EXPECT_EQ(checkDataMessage(m, LimitsConfig{}, map3d::Grid(1.0)), "");
 }
 
+TEST(DecodeRobotFrame, TheFirstFrameMustBeAValidHello) {
+  v1::RobotMessage m;
+  m.set_seq(7);
+  *m.mutable_hello() = hello();
+  const RobotFrame ok = decodeRobotFrame(m.SerializeAsString(), true, nullptr, LimitsConfig{});
+  ASSERT_TRUE(ok.message) << ok.problem;
+  EXPECT_EQ(ok.message->hello().robot_id(), "robot-1");
+  EXPECT_EQ(ok.seq, 7u);
+
+  m.mutable_hello()->set_robot_id("robot 1");
+  const RobotFrame bad = decodeRobotFrame(m.SerializeAsString(), true, nullptr, LimitsConfig{});
+  EXPECT_FALSE(bad.message);
+  EXPECT_EQ(bad.code, "invalid_hello");
+  EXPECT_TRUE(bad.fatal);
+
+  const RobotFrame cloud = decodeRobotFrame(cloudMessage({1, 2, 3}).SerializeAsString(), true, nullptr, LimitsConfig{});
+  EXPECT_EQ(cloud.code, "hello_required");
+  EXPECT_EQ(cloud.seq, 1u);
+  EXPECT_TRUE(cloud.fatal);
+}
+
+TEST(DecodeRobotFrame, DataFramesAreParsedAndChecked) {
+  const map3d::Grid grid(0.1);
+  const RobotFrame ok = decodeRobotFrame(cloudMessage({1, 2, 3}).SerializeAsString(), true, &grid, LimitsConfig{});
+  ASSERT_TRUE(ok.message) << ok.problem;
+  EXPECT_EQ(ok.message->cloud().xyz_m_size(), 3);
+
+  const RobotFrame ragged = decodeRobotFrame(cloudMessage({1, 2}).SerializeAsString(), true, &grid, LimitsConfig{});
+  EXPECT_EQ(ragged.code, "invalid_message");
+  EXPECT_NE(ragged.problem.find("multiple of 3"), std::string::npos) << ragged.problem;
+  EXPECT_EQ(ragged.seq, 1u);
+  EXPECT_FALSE(ragged.fatal);
+
+  const RobotFrame text = decodeRobotFrame(cloudMessage({1, 2, 3}).SerializeAsString(), false, &grid, LimitsConfig{});
+  EXPECT_EQ(text.code, "invalid_message");
+  EXPECT_NE(text.problem.find("binary"), std::string::npos) << text.problem;
+
+  const RobotFrame garbage = decodeRobotFrame("\xFF\xFF\xFF", true, &grid, LimitsConfig{});
+  EXPECT_EQ(garbage.code, "invalid_message");
+  EXPECT_EQ(garbage.seq, 0u);
+}
+
 TEST(ToIsometry, AllZeroQuaternionIsIdentity) {
   v1::Pose3 pose;
   pose.mutable_position_m()->set_x(1.0);

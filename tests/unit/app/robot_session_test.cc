@@ -159,5 +159,34 @@ TEST(RobotSessionMemoryBound, AboveTheBoundDataIsRefusedUnstoredAndTheSessionSta
   session->onClose();
 }
 
+// The first frame of a stream goes through decodeRobotFrame as a Hello: anything else ends the
+// stream before a robot or a map is recorded.
+TEST(RobotSessionFirstFrame, MustBeAValidHello) {
+  store::TempDir dir;
+  MappingService service{testing::configIn(dir.path())};
+  const auto first = [&](const v1::RobotMessage& message) {
+    auto connection = std::make_shared<testing::RecordingConnection>();
+    auto session = std::make_shared<RobotSession>(service, Principal{Role::kAdmin, {}});
+    session->onOpen(connection);
+    session->onMessage(message.SerializeAsString(), true);
+    session->onClose();
+    const std::vector<v1::ServerMessage> sent = connection->sent();
+    return sent.size() == 1 && sent[0].has_error() ? sent[0].error() : v1::Error{};
+  };
+  const v1::Error cloud = first(testing::smallCloud(4));
+  EXPECT_EQ(cloud.code(), "hello_required");
+  EXPECT_EQ(cloud.seq(), 4u);
+  EXPECT_TRUE(cloud.fatal());
+  v1::RobotMessage hello;
+  hello.mutable_hello()->set_robot_id("bot");
+  hello.mutable_hello()->set_map("../lab");
+  const v1::Error bad_map = first(hello);
+  EXPECT_EQ(bad_map.code(), "invalid_hello");
+  EXPECT_TRUE(bad_map.fatal());
+  EXPECT_TRUE(service.robots().empty());
+  EXPECT_TRUE(service.maps().empty());
+  EXPECT_EQ(service.metrics().messages_rejected.load(), 2u);
+}
+
 }  // namespace
 }  // namespace rmap::app

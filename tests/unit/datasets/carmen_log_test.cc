@@ -171,6 +171,13 @@ TEST(CarmenLog, StampsAreExact) {
   EXPECT_THROW(parseCarmenStampNs("nan", "t", 1), std::runtime_error);
 }
 
+// Found by tests/fuzz/carmen_log_fuzz.cc: ten plain digits overflowed int64 nanoseconds (UB).
+TEST(CarmenLog, PlainStampsBeyondTheRangeAreRefused) {
+  EXPECT_EQ(parseCarmenStampNs("8999999999.999999999", "t", 1), 8999999999999999999);
+  EXPECT_THROW(parseCarmenStampNs("9710505559.981874", "t", 1), std::runtime_error);
+  EXPECT_THROW(parseCarmenStampNs("9999999999", "t", 1), std::runtime_error);
+}
+
 const std::string kData = RMAP_SHARED_DATA_DIR;
 
 TEST(CarmenLog, RealCorrectedAndRawLogs) {

@@ -81,6 +81,36 @@ TEST(PlyCloud, MalformedFilesAreRejectedWithTheReason) {
   expectError("ply\nformat ascii 1.0\nelement vertex 1\nproperty list uchar float x\nend_header\n", "is a list");
 }
 
+// Found by tests/fuzz/ply_cloud_fuzz.cc: a count of 2^64 or more was cast to size_t (undefined),
+// and a large count took its memory before the data was checked.
+TEST(PlyCloud, CountsBeyondTheDataAreRefusedBeforeMemoryIsTaken) {
+  const std::string xyz = "property float x\nproperty float y\nproperty float z\nend_header\n";
+  expectError("ply\nformat ascii 1.0\nelement vertex 3.55556e+21\n" + xyz, "t.ply:3: element count");
+  expectError("ply\nformat ascii 1.0\nelement vertex 18446744073709551616\n" + xyz, "t.ply:3: element count");
+  expectError("ply\nformat ascii 1.0\nelement vertex 1e15\n" + xyz + "1 2 3\n",
+              "declares 1000000000000000 vertices, more than the 6 bytes of ascii data");
+  expectError("ply\nformat ascii 1.0\nelement vertex 4\n" + xyz + "1 2 3\n", "more than the 6 bytes");
+  expectError("ply\nformat binary_little_endian 1.0\nelement vertex 1e15\n" + xyz + std::string(12, '\0'),
+              "binary data ends in element 'vertex'");
+  // The bound is not tighter than the data: one-character values, no final '\n'; a vertex line
+  // too short for its values is refused by name.
+  EXPECT_EQ(parsePlyCloud("ply\nformat ascii 1.0\nelement vertex 2\n" + xyz + "1 2 3\n4 5 6", "t.ply").points_m.size(),
+            2u);
+  expectError("ply\nformat ascii 1.0\nelement vertex 2\n" + xyz + "1 2 3\n4", "t.ply:9: vertex needs 3 values, got 1");
+}
+
+// Seen while fixing that: binary data was looked for after the first "\nend_header" of the
+// file, not after the line that ended the header.
+TEST(PlyCloud, BinaryDataStartsAfterTheHeaderLine) {
+  std::string ply =
+      "ply\nformat binary_little_endian 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
+      "property float z\n  end_header\n";
+  for (float v : {1.0f, 2.0f, 3.0f}) put(ply, v);
+  const PlyCloud cloud = parsePlyCloud(ply, "t.ply");
+  ASSERT_EQ(cloud.points_m.size(), 1u);
+  EXPECT_EQ(cloud.points_m[0], Eigen::Vector3f(1, 2, 3));
+}
+
 TEST(PlyCloud, ReadsTheSharedLidarScan) {
   const std::string path = std::string(RMAP_SHARED_DATA_DIR) + "/lidar-intensity/small-gicp-pair/source.ply";
   if (!std::filesystem::exists(path)) GTEST_SKIP() << "shared data not found: " << path;
