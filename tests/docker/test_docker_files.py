@@ -42,6 +42,7 @@ TEST_ONLY_PACKAGES = {
     "libgtest-dev", "libgmock-dev", "libbenchmark-dev", "liboctomap-dev", "chromium", "jq",
     "python3-protobuf", "python3-websockets", "python3-yaml",
     "openssl",  # the command line makes the TLS tests' certificates
+    "clang", "libclang-rt-14-dev",  # libFuzzer (tests/fuzz)
 }
 JSON_FORM = {"CMD", "ENTRYPOINT", "SHELL"}  # instructions whose argument, when it starts with [, is a JSON array
 
