@@ -45,7 +45,12 @@ constexpr double kScanRate_hz = 4.0;
 constexpr int kReadingViewers = 24;
 constexpr int kStalledViewers = 8;
 constexpr size_t kViewerQueueBytes = 64u << 10;
+#ifdef RMAP_SANITIZE
+// A sanitized rmapd's resident memory also holds ASan's shadow and its 256 MiB quarantine.
+constexpr uint64_t kMemoryBoundBytes = uint64_t{2} << 30;
+#else
 constexpr uint64_t kMemoryBoundBytes = 512u << 20;
+#endif
 /// Generous: only a stall fails them, not a busy machine. The server's own measure (frame
 /// read → ack queued) is the bound it keeps; the robots' adds their threads' waits for a core.
 constexpr double kServerAckP99Bound_s = 2.5;  // a bucket bound of rmap_ack_latency_seconds
