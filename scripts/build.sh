@@ -2,5 +2,5 @@
 # Configures and builds rmap (Release) into build/; binaries land in build/bin/.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-cmake -S . -B build -DCMAKE_BUILD_TYPE=Release "$@"
+bash scripts/configure.sh build "$@"
 cmake --build build -j"$(nproc)"

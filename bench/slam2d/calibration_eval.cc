@@ -24,12 +24,12 @@
 namespace rmap::bench {
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr double kUnmeasured = std::numeric_limits<double>::quiet_NaN();
 constexpr double kDeg = std::numbers::pi / 180.0;
 
 /// Value at quantile q ∈ [0, 1] (nearest rank); NaN for no values.
 double quantile(std::vector<double> v, double q) {
-  if (v.empty()) return kNaN;
+  if (v.empty()) return kUnmeasured;
   auto at = v.begin() + static_cast<ptrdiff_t>(std::min(v.size() - 1.0, std::floor(q * v.size())));
   std::nth_element(v.begin(), at, v.end());
   return *at;
@@ -57,7 +57,7 @@ uint64_t packCell(int64_t cx, int64_t cy) {
 }
 
 /// One return of a simulated run with everything the scores need.
-struct SimReturn {
+struct CalibrationReturn {
   uint64_t cell;
   float range_m;
   float cos_estimated;  ///< NaN without an estimate
@@ -66,7 +66,7 @@ struct SimReturn {
   float reflectivity;   ///< ground truth
 };
 
-std::vector<SimReturn> simulateRun(const sim::Laser2dModel& model, uint64_t seed, const CalibrationEvalOptions& o,
+std::vector<CalibrationReturn> simulateRun(const sim::Laser2dModel& model, uint64_t seed, const CalibrationEvalOptions& o,
                                    size_t& scans) {
   const sim::VoxelWorld world = sim::makeBuilding(sim::BuildingOptions{}, seed);
   sim::TrajectoryOptions tour;
@@ -74,7 +74,7 @@ std::vector<SimReturn> simulateRun(const sim::Laser2dModel& model, uint64_t seed
   tour.sensor_height_m = o.sensor_height_m;
   const std::vector<Eigen::Isometry3d> poses = sim::planTrajectory(world, tour, seed);
   std::mt19937_64 rng(seed * 0x9E3779B97F4A7C15ull + std::hash<std::string>{}(model.name));
-  std::vector<SimReturn> out;
+  std::vector<CalibrationReturn> out;
   for (const Eigen::Isometry3d& pose : poses) {
     const sim::Laser2dScan sim_scan = sim::simulateLaser2d(world, pose, model, rng);
     slam2d::LaserScan scan;
@@ -106,23 +106,23 @@ std::vector<SimReturn> simulateRun(const sim::Laser2dModel& model, uint64_t seed
 }
 
 /// Reflectivity of every return under a calibration (NaN where it gives none).
-std::vector<double> reflectivities(const slam2d::IntensityCalibration& cal, const std::vector<SimReturn>& run) {
+std::vector<double> reflectivities(const slam2d::IntensityCalibration& cal, const std::vector<CalibrationReturn>& run) {
   std::vector<double> out;
   out.reserve(run.size());
-  for (const SimReturn& s : run) out.push_back(cal.reflectivity(s.intensity, s.range_m, s.cos_estimated));
+  for (const CalibrationReturn& s : run) out.push_back(cal.reflectivity(s.intensity, s.range_m, s.cos_estimated));
   return out;
 }
 
-CalibrationScore score(const std::vector<double>& rho, const std::vector<SimReturn>& run) {
+CalibrationScore score(const std::vector<double>& rho, const std::vector<CalibrationReturn>& run) {
   std::vector<double> rel;
   for (size_t j = 0; j < run.size(); ++j) {
     if (std::isfinite(rho[j])) rel.push_back(std::abs(rho[j] - run[j].reflectivity) / run[j].reflectivity);
   }
-  return {quantile(rel, 0.5), quantile(rel, 0.9), run.empty() ? 0.0 : double(rel.size()) / run.size(), kNaN};
+  return {quantile(rel, 0.5), quantile(rel, 0.9), run.empty() ? 0.0 : double(rel.size()) / run.size(), kUnmeasured};
 }
 
 /// Median over cells of the coefficient of variation of `value` per cell, on the returns `use` selects.
-double medianCellVariation(const std::vector<SimReturn>& run, const std::vector<char>& use,
+double medianCellVariation(const std::vector<CalibrationReturn>& run, const std::vector<char>& use,
                            const std::vector<double>& value, int min_views, size_t* cells) {
   std::unordered_map<uint64_t, std::vector<double>> per_cell;
   for (size_t j = 0; j < run.size(); ++j) {
@@ -141,12 +141,12 @@ ScannerCalibrationEval evaluateScanner(const sim::Laser2dModel& model, const Cal
   e.scanner = model.name;
   e.saturation_true = model.intensity.saturation;
   size_t scans = 0;
-  const std::vector<SimReturn> train = simulateRun(model, o.seed, o, scans);
-  const std::vector<SimReturn> test = simulateRun(model, o.seed + 1, o, e.scans);
+  const std::vector<CalibrationReturn> train = simulateRun(model, o.seed, o, scans);
+  const std::vector<CalibrationReturn> test = simulateRun(model, o.seed + 1, o, e.scans);
   e.returns = test.size();
 
   std::vector<double> incidence_err;
-  for (const SimReturn& s : test) {
+  for (const CalibrationReturn& s : test) {
     if (std::isfinite(s.cos_estimated)) {
       incidence_err.push_back(std::abs(std::acos(std::min(1.0f, s.cos_estimated)) - std::acos(std::min(1.0f, s.cos_true))) / kDeg);
     }
@@ -155,17 +155,17 @@ ScannerCalibrationEval evaluateScanner(const sim::Laser2dModel& model, const Cal
   e.incidence_coverage = test.empty() ? 0.0 : double(incidence_err.size()) / test.size();
 
   std::vector<slam2d::ReflectivityObservation> targets;
-  for (const SimReturn& s : train) targets.push_back({s.reflectivity, s.range_m, s.cos_estimated, s.intensity});
+  for (const CalibrationReturn& s : train) targets.push_back({s.reflectivity, s.range_m, s.cos_estimated, s.intensity});
   const slam2d::IntensityCalibration supervised = slam2d::fitCalibration(targets, o.supervised);
   e.saturation_detected = supervised.saturation();
   e.supervised_calibration = supervised.toText();
 
   std::vector<slam2d::IntensityObservation> map_readings;
-  for (const SimReturn& s : test) map_readings.push_back({s.cell, s.range_m, s.cos_estimated, s.intensity});
+  for (const CalibrationReturn& s : test) map_readings.push_back({s.cell, s.range_m, s.cos_estimated, s.intensity});
   // The reference target: the surface of known reflectivity seen most (each
   // surface of the building has its own reflectivity, so the value names it).
   std::unordered_map<float, std::vector<slam2d::ReflectivityObservation>> by_surface;
-  for (const SimReturn& s : test) {
+  for (const CalibrationReturn& s : test) {
     by_surface[s.reflectivity].push_back({s.reflectivity, s.range_m, s.cos_estimated, s.intensity});
   }
   const std::vector<slam2d::ReflectivityObservation>* reference = nullptr;
@@ -191,10 +191,10 @@ ScannerCalibrationEval evaluateScanner(const sim::Laser2dModel& model, const Cal
   }
   {
     std::vector<slam2d::ReflectivityObservation> true_targets;
-    for (const SimReturn& s : train) true_targets.push_back({s.reflectivity, s.range_m, s.cos_true, s.intensity});
+    for (const CalibrationReturn& s : train) true_targets.push_back({s.reflectivity, s.range_m, s.cos_true, s.intensity});
     const slam2d::IntensityCalibration cal = slam2d::fitCalibration(true_targets, o.supervised);
     std::vector<double> rho;
-    for (const SimReturn& s : test) rho.push_back(cal.reflectivity(s.intensity, s.range_m, s.cos_true));
+    for (const CalibrationReturn& s : test) rho.push_back(cal.reflectivity(s.intensity, s.range_m, s.cos_true));
     e.supervised_true_incidence_rel_err_median = score(rho, test).rel_err_median;
   }
 

@@ -18,10 +18,6 @@ constexpr double kTableTop_m = 0.04;  ///< table top thickness (at least one vox
 constexpr double kDoorApproach_m = 1.3;  ///< furniture-free depth in front of a door
 constexpr double kFurnitureGap_m = 0.6;  ///< least free gap between furniture pieces
 
-Box box(double x0, double y0, double z0, double x1, double y1, double z1) {
-  return {Eigen::Vector3d(x0, y0, z0), Eigen::Vector3d(x1, y1, z1)};
-}
-
 struct StairGeometry {
   int steps;
   double rise, run, landing;

@@ -11,10 +11,6 @@ namespace {
 
 using Box = Eigen::AlignedBox3d;
 
-Box box(double x0, double y0, double z0, double x1, double y1, double z1) {
-  return {Eigen::Vector3d(x0, y0, z0), Eigen::Vector3d(x1, y1, z1)};
-}
-
 /// One straight wall face along the corridor: points p0 + t·along (t ∈ [0, length]),
 /// `inward` the unit normal into the corridor, `depth` the wall's own thickness behind the face.
 struct WallFace {

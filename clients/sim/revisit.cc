@@ -10,7 +10,7 @@ namespace rmap::sim {
 namespace {
 
 /// A piece of the rounded path: a straight segment or a left arc.
-struct Piece {
+struct PathPiece {
   Eigen::Vector2d start;
   double heading_rad;  ///< at the start
   double length_m;
@@ -19,7 +19,7 @@ struct Piece {
 
 double wrapAngle(double a) { return std::remainder(a, 2.0 * std::numbers::pi); }
 
-std::vector<Piece> roundedPath(const std::vector<Eigen::Vector2d>& corners, double radius) {
+std::vector<PathPiece> roundedPath(const std::vector<Eigen::Vector2d>& corners, double radius) {
   const size_t n = corners.size();
   std::vector<double> tangent(n);  // cut back from each corner
   std::vector<double> turn(n);
@@ -31,7 +31,7 @@ std::vector<Piece> roundedPath(const std::vector<Eigen::Vector2d>& corners, doub
     if (!(turn[i] > 1e-9)) throw std::invalid_argument("planRevisits: path must turn left (counter-clockwise) at every corner");
     tangent[i] = radius * std::tan(0.5 * turn[i]);
   }
-  std::vector<Piece> pieces;
+  std::vector<PathPiece> pieces;
   for (size_t i = 0; i < n; ++i) {
     const Eigen::Vector2d a = corners[i], b = corners[(i + 1) % n];
     const double length = (b - a).norm();
@@ -47,8 +47,8 @@ std::vector<Piece> roundedPath(const std::vector<Eigen::Vector2d>& corners, doub
 }
 
 /// Position and heading at arc length s (0 ≤ s < total) along the pieces.
-void along(const std::vector<Piece>& pieces, double s, Eigen::Vector2d& p, double& heading) {
-  for (const Piece& piece : pieces) {
+void along(const std::vector<PathPiece>& pieces, double s, Eigen::Vector2d& p, double& heading) {
+  for (const PathPiece& piece : pieces) {
     if (s > piece.length_m) {
       s -= piece.length_m;
       continue;
@@ -92,9 +92,9 @@ std::vector<RevisitFrame> planRevisits(const std::vector<Eigen::Vector2d>& path_
                                        uint64_t seed) {
   options.validate();
   if (path_m.size() < 3) throw std::invalid_argument("planRevisits: the path needs at least 3 corners");
-  const std::vector<Piece> pieces = roundedPath(path_m, options.corner_radius_m);
+  const std::vector<PathPiece> pieces = roundedPath(path_m, options.corner_radius_m);
   double lap_m = 0.0;
-  for (const Piece& piece : pieces) lap_m += piece.length_m;
+  for (const PathPiece& piece : pieces) lap_m += piece.length_m;
   if (lap_m > 1e6 * options.step_m / options.laps) throw std::invalid_argument("planRevisits: more than 10⁶ frames");
 
   std::mt19937_64 rng(seed);

@@ -18,7 +18,7 @@ namespace {
 constexpr double kInsideCell_m = 1e-6;
 
 /// A straight horizontal piece of the path inside one cell, at one node's sensor height.
-struct Piece {
+struct CellPiece {
   Eigen::Vector2d a, b;
   int node;
 };
@@ -26,7 +26,7 @@ struct Piece {
 /// Walks the straight segment between two nodes' cell centres over the cell
 /// grid (2D Amanatides & Woo). Succeeds when every cell crossed has a node
 /// within max_step of the previous one and the walk ends at node `to`.
-bool straightPieces(const NavigableSpace& space, int from, int to, std::vector<Piece>& out) {
+bool straightPieces(const NavigableSpace& space, int from, int to, std::vector<CellPiece>& out) {
   const auto& nodes = space.nodes();
   const Eigen::Vector2d p0 = space.sensorPosition(from).head<2>(), p1 = space.sensorPosition(to).head<2>();
   const Eigen::Vector2d d = p1 - p0;
@@ -121,7 +121,7 @@ class TourPlanner {
         at = planLeg(at);
         start = point(pieces_[0], 0.0);
       }
-      const Piece& p = pieces_[piece];
+      const CellPiece& p = pieces_[piece];
       const Eigen::Vector3d end = point(p, 1.0);
       if ((end - pose).norm() <= step) {
         // The whole rest of this piece is within reach; look at the next one.
@@ -143,12 +143,12 @@ class TourPlanner {
   }
 
  private:
-  Eigen::Vector3d point(const Piece& p, double u) const {
+  Eigen::Vector3d point(const CellPiece& p, double u) const {
     const Eigen::Vector2d xy = p.a + u * (p.b - p.a);
     return {xy.x(), xy.y(), space_.sensorZ(p.node)};
   }
 
-  void emit(const Eigen::Vector3d& position, const Piece& p, Eigen::Vector3d& pose, std::vector<Eigen::Vector3d>& out) {
+  void emit(const Eigen::Vector3d& position, const CellPiece& p, Eigen::Vector3d& pose, std::vector<Eigen::Vector3d>& out) {
     const Eigen::AlignedBox2d box = space_.cellBox(space_.nodes()[p.node].cx, space_.nodes()[p.node].cy);
     const Eigen::Vector2d inset = Eigen::Vector2d::Constant(kInsideCell_m);
     const Eigen::Vector2d xy = position.head<2>().cwiseMax(box.min() + inset).cwiseMin(box.max() - inset);
@@ -201,12 +201,12 @@ class TourPlanner {
     std::reverse(path.begin(), path.end());
     // Straighten: from each kept node, jump to the farthest node still in straight sight.
     for (size_t i = 0; i + 1 < path.size();) {
-      std::vector<Piece> best;
+      std::vector<CellPiece> best;
       size_t j = i + 1;
       if (!straightPieces(space_, path[i], path[j], best)) {
         throw std::logic_error("planTrajectory: neighbouring nodes are not in straight sight");
       }
-      std::vector<Piece> trial;
+      std::vector<CellPiece> trial;
       while (j + 1 < path.size() && straightPieces(space_, path[i], path[j + 1], trial)) {
         best.swap(trial);
         trial.clear();
@@ -223,7 +223,7 @@ class TourPlanner {
   std::mt19937_64 rng_;
   std::vector<int> members_;
   std::vector<char> visited_;
-  std::vector<Piece> pieces_;
+  std::vector<CellPiece> pieces_;
 };
 
 }  // namespace

@@ -27,6 +27,11 @@ namespace rmap::sim {
 /// Inclusive range of global voxel indices.
 using VoxelBox = Eigen::AlignedBox<int, 3>;
 
+/// The box from corner (x0, y0, z0) to corner (x1, y1, z1), metres; the worlds are built of these.
+inline Eigen::AlignedBox3d box(double x0, double y0, double z0, double x1, double y1, double z1) {
+  return {Eigen::Vector3d(x0, y0, z0), Eigen::Vector3d(x1, y1, z1)};
+}
+
 /// First occupied voxel along a ray.
 struct RayHit {
   double range_m = 0.0;    ///< distance from the ray origin to point_m

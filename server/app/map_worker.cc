@@ -12,6 +12,7 @@
 
 #include "app/camera_frames.h"
 #include "app/ingest.h"
+#include "app/wall_clock.h"
 #include "loop/panorama.h"
 #include "loop/reflectivity_patch.h"
 #include "map3d/map_file.h"
@@ -54,11 +55,6 @@ Eigen::Isometry3d planarIsometry(const slam2d::Pose2& p, double z_m) {
   out.linear() = Eigen::AngleAxisd(p.theta_rad, Eigen::Vector3d::UnitZ()).toRotationMatrix();
   out.translation() = Eigen::Vector3d(p.x_m, p.y_m, z_m);
   return out;
-}
-
-int64_t nowNs() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::system_clock::now().time_since_epoch())
-      .count();
 }
 
 /// Writes `blocks` into `map` a slice at a time: replaceBlocks holds every block it writes

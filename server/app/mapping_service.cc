@@ -6,6 +6,7 @@
 
 #include "app/bow_recognizer.h"
 #include "app/robot_session.h"
+#include "app/wall_clock.h"
 #include "map3d/map_file.h"
 
 #ifndef RMAP_VERSION
@@ -26,11 +27,6 @@ namespace {
 
 /// How often the tick thread writes robots' latest message times to the store.
 constexpr auto kLastSeenPersistPeriod = std::chrono::seconds(1);
-
-int64_t nowNs() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::system_clock::now().time_since_epoch())
-      .count();
-}
 
 /// Calls fn(key, field) for every parameter that shapes a map's content, under its key in the
 /// map's stored params_json: one list for writing and reading them.

@@ -5,6 +5,7 @@
 #include "app/ingest.h"
 #include "app/mapping_service.h"
 #include "app/robot_sensors.h"
+#include "app/wall_clock.h"
 
 namespace rmap::app {
 
@@ -20,11 +21,6 @@ std::string sensorsJson(const v1::Hello& hello) {
                        {"model", s.model()}});
   }
   return sensors.dump();
-}
-
-int64_t nowNs() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::system_clock::now().time_since_epoch())
-      .count();
 }
 
 }  // namespace

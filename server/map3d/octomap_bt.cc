@@ -14,7 +14,7 @@ namespace rmap::map3d {
 namespace {
 
 // OctoMap compares only this prefix of the first line (AbstractOccupancyOcTree::readBinary).
-constexpr std::string_view kMagic = "# Octomap OcTree binary file";
+constexpr std::string_view kBtMagic = "# Octomap OcTree binary file";
 constexpr int kTreeDepth = kOctreeDepth;
 constexpr int32_t kKeyOffset = kOctreeKeyOffset;
 
@@ -24,27 +24,27 @@ constexpr unsigned kFreeLeaf = 1;
 constexpr unsigned kOccupiedLeaf = 2;
 constexpr unsigned kInnerNode = 3;
 
-const std::string kFormat = "OctoMap .bt";
+const std::string kBtFormat = "OctoMap .bt";
 
-[[noreturn]] void fail(const std::string& what) { throw std::runtime_error(kFormat + ": " + what); }
+[[noreturn]] void failBt(const std::string& what) { throw std::runtime_error(kBtFormat + ": " + what); }
 
 OctreeHeader readHeader(std::string_view bytes) {
-  OctreeHeader h = readOctreeHeader(bytes, kMagic, kFormat);
+  OctreeHeader h = readOctreeHeader(bytes, kBtMagic, kBtFormat);
   // "1" is the deprecated id OctoMap still maps to OcTree.
   if (h.id != "OcTree" && h.id != "1") {
-    fail(h.id.empty() ? "header has no id" : "unsupported tree id \"" + h.id + "\" (only OcTree)");
+    failBt(h.id.empty() ? "header has no id" : "unsupported tree id \"" + h.id + "\" (only OcTree)");
   }
   return h;
 }
 
 /// Depth-first reader of the node stream, the inverse of OctoMap's writeBinaryNode.
-class NodeReader {
+class BtNodeReader {
  public:
-  NodeReader(std::string_view data, std::vector<BtLeaf>& leaves) : data_(data), leaves_(leaves) {}
+  BtNodeReader(std::string_view data, std::vector<BtLeaf>& leaves) : data_(data), leaves_(leaves) {}
 
   /// Reads the inner node at `depth` whose cube starts at OctoMap key `key`.
   void readInner(int depth, const std::array<int32_t, 3>& key) {
-    if (pos_ + 2 > data_.size()) fail("truncated data at byte " + std::to_string(pos_) + " of the tree");
+    if (pos_ + 2 > data_.size()) failBt("truncated data at byte " + std::to_string(pos_) + " of the tree");
     // Byte 1 holds children 0-3, byte 2 children 4-7, two bits each from the lowest.
     const unsigned codes = static_cast<unsigned>(static_cast<uint8_t>(data_[pos_])) |
                            (static_cast<unsigned>(static_cast<uint8_t>(data_[pos_ + 1])) << 8);
@@ -60,7 +60,7 @@ class NodeReader {
                                          key[2] + ((i & 4) ? child_size : 0)};
       if (code == kInnerNode) {
         if (child_depth == kTreeDepth) {
-          fail("inner node below the deepest level (depth 16) at byte " + std::to_string(pos_ - 2));
+          failBt("inner node below the deepest level (depth 16) at byte " + std::to_string(pos_ - 2));
         }
         readInner(child_depth, child);
       } else {
@@ -107,9 +107,9 @@ uint64_t cubeEntry(const CellKey& min_cell, int log2_size, bool occupied) {
 int entryLog2Size(uint64_t e) { return static_cast<int>((e >> 1) & 31u); }
 
 /// Writes entries sorted by code, of disjoint aligned cubes of edge at most 2^15 cells.
-class NodeWriter {
+class BtNodeWriter {
  public:
-  explicit NodeWriter(std::string& out) : out_(out) {}
+  explicit BtNodeWriter(std::string& out) : out_(out) {}
 
   /// Writes the subtree of the node at `depth` holding the entries [begin, end)
   /// (non-empty) and returns its code in the parent. A cube as large as the
@@ -154,17 +154,17 @@ uint64_t countNodes(std::string_view data) {
 
 }  // namespace
 
-bool looksLikeBt(std::string_view bytes) { return bytes.substr(0, kMagic.size()) == kMagic; }
+bool looksLikeBt(std::string_view bytes) { return bytes.substr(0, kBtMagic.size()) == kBtMagic; }
 
 BtTree parseBt(std::string_view bytes) {
   const OctreeHeader header = readHeader(bytes);
   BtTree tree;
   tree.resolution_m = header.resolution_m;
   const std::string_view data = bytes.substr(header.data_offset);
-  if (isEmptyTree(header, data, kFormat)) return tree;
-  NodeReader reader(data, tree.leaves);
+  if (isEmptyTree(header, data, kBtFormat)) return tree;
+  BtNodeReader reader(data, tree.leaves);
   reader.readInner(0, {0, 0, 0});
-  checkTreeEnd(header, data, reader.position(), reader.nodes(), kFormat);
+  checkTreeEnd(header, data, reader.position(), reader.nodes(), kBtFormat);
   return tree;
 }
 
@@ -180,13 +180,13 @@ void checkResolution(double resolution_m, const char* who) {
 /// The file around the tree of `entries` (sorted by code, cubes disjoint).
 std::string writeEntries(double resolution_m, const std::vector<uint64_t>& entries) {
   std::string data;
-  if (!entries.empty()) NodeWriter(data).write(entries.data(), entries.data() + entries.size(), 0);
+  if (!entries.empty()) BtNodeWriter(data).write(entries.data(), entries.data() + entries.size(), 0);
 
   char res[32];  // holds any double in shortest round-trip form
   char* res_end = std::to_chars(res, res + sizeof res, resolution_m).ptr;
   std::string out;
   out.reserve(data.size() + 160);
-  out += kMagic;
+  out += kBtMagic;
   out += "\n# (feel free to add / change comments, but leave the first line as it is!)\n#\nid OcTree\nsize ";
   out += std::to_string(countNodes(data));
   out += "\nres ";

@@ -9,7 +9,7 @@ namespace rmap::slam2d {
 
 namespace {
 
-void require(bool ok, const std::string& what) {
+void requireLoopOption(bool ok, const std::string& what) {
   if (!ok) throw std::invalid_argument("LoopClosureOptions: " + what);
 }
 
@@ -30,43 +30,43 @@ double secondsSince(std::chrono::steady_clock::time_point t0) {
 }  // namespace
 
 void LoopClosureOptions::validate() const {
-  require(submap_keyframes >= 2, "submap_keyframes must be ≥ 2");
-  require(exclude_recent_submaps >= 0, "exclude_recent_submaps must be ≥ 0");
-  require(search_every_keyframes >= 1, "search_every_keyframes must be ≥ 1");
-  require(max_candidates >= 1, "max_candidates must be ≥ 1");
-  require(nonNegative(window_m) && nonNegative(window_growth_m_per_m) && max_window_m >= window_m &&
+  requireLoopOption(submap_keyframes >= 2, "submap_keyframes must be ≥ 2");
+  requireLoopOption(exclude_recent_submaps >= 0, "exclude_recent_submaps must be ≥ 0");
+  requireLoopOption(search_every_keyframes >= 1, "search_every_keyframes must be ≥ 1");
+  requireLoopOption(max_candidates >= 1, "max_candidates must be ≥ 1");
+  requireLoopOption(nonNegative(window_m) && nonNegative(window_growth_m_per_m) && max_window_m >= window_m &&
               max_window_m <= 50.0,
           "need 0 ≤ window_m ≤ max_window_m ≤ 50 and a growth ≥ 0");
-  require(nonNegative(window_rad) && nonNegative(window_growth_rad_per_m) && max_window_rad >= window_rad &&
+  requireLoopOption(nonNegative(window_rad) && nonNegative(window_growth_rad_per_m) && max_window_rad >= window_rad &&
               max_window_rad <= 3.14159,
           "need 0 ≤ window_rad ≤ max_window_rad ≤ π and a growth ≥ 0");
-  require(nonNegative(candidate_distance_m), "candidate_distance_m must be ≥ 0");
-  require(min_score > 0.0 && min_score <= 1.0, "min_score must be in (0, 1]");
-  require(sparse_min_score > 0.0 && sparse_min_score <= 1.0, "sparse_min_score must be in (0, 1]");
-  require(nonNegative(sparse_keyframe_spacing_m), "sparse_keyframe_spacing_m must be ≥ 0");
-  require(sparse_raster_dilation_cells >= 0 && sparse_raster_dilation_cells <= 10 && submap.raster_dilation_cells >= 0 &&
+  requireLoopOption(nonNegative(candidate_distance_m), "candidate_distance_m must be ≥ 0");
+  requireLoopOption(min_score > 0.0 && min_score <= 1.0, "min_score must be in (0, 1]");
+  requireLoopOption(sparse_min_score > 0.0 && sparse_min_score <= 1.0, "sparse_min_score must be in (0, 1]");
+  requireLoopOption(nonNegative(sparse_keyframe_spacing_m), "sparse_keyframe_spacing_m must be ≥ 0");
+  requireLoopOption(sparse_raster_dilation_cells >= 0 && sparse_raster_dilation_cells <= 10 && submap.raster_dilation_cells >= 0 &&
               submap.raster_dilation_cells <= 10,
           "raster dilation must be in [0, 10] cells");
-  require(nonNegative(small_correction_m) && nonNegative(small_correction_rad), "small_correction_* must be ≥ 0");
-  require(support_keyframes >= 0, "support_keyframes must be ≥ 0");
-  require(nonNegative(support_tolerance_m) && nonNegative(support_tolerance_rad), "support_tolerance_* must be ≥ 0");
-  require(optimize_every_keyframes >= 1, "optimize_every_keyframes must be ≥ 1");
-  require(positive(sequential_sigma_m) && positive(sequential_sigma_rad) && positive(loop_sigma_m) &&
+  requireLoopOption(nonNegative(small_correction_m) && nonNegative(small_correction_rad), "small_correction_* must be ≥ 0");
+  requireLoopOption(support_keyframes >= 0, "support_keyframes must be ≥ 0");
+  requireLoopOption(nonNegative(support_tolerance_m) && nonNegative(support_tolerance_rad), "support_tolerance_* must be ≥ 0");
+  requireLoopOption(optimize_every_keyframes >= 1, "optimize_every_keyframes must be ≥ 1");
+  requireLoopOption(positive(sequential_sigma_m) && positive(sequential_sigma_rad) && positive(loop_sigma_m) &&
               positive(loop_sigma_rad) && nonNegative(sequential_sigma_m_per_m) &&
               nonNegative(sequential_sigma_rad_per_m),
           "edge standard deviations must be finite and > 0 (their growth ≥ 0)");
-  require(std::isfinite(ambiguous_sigma_along_m) && ambiguous_sigma_along_m >= loop_sigma_m,
+  requireLoopOption(std::isfinite(ambiguous_sigma_along_m) && ambiguous_sigma_along_m >= loop_sigma_m,
           "ambiguous_sigma_along_m must be finite and ≥ loop_sigma_m");
-  require(positive(max_loop_error_m) && positive(max_loop_error_rad), "max_loop_error_* must be > 0");
-  require(cached_submaps >= 1, "cached_submaps must be ≥ 1");
-  require(nonNegative(match_point_spacing_m), "match_point_spacing_m must be ≥ 0");
-  require(nonNegative(rerender_shift_m) && nonNegative(rerender_shift_rad), "rerender_shift_* must be ≥ 0");
-  require(submap.levels >= 1 && submap.levels <= 8, "submap.levels must be in [1, 8]");
-  require(submap.unknown_probability >= 0.0f && submap.unknown_probability <= 1.0f,
+  requireLoopOption(positive(max_loop_error_m) && positive(max_loop_error_rad), "max_loop_error_* must be > 0");
+  requireLoopOption(cached_submaps >= 1, "cached_submaps must be ≥ 1");
+  requireLoopOption(nonNegative(match_point_spacing_m), "match_point_spacing_m must be ≥ 0");
+  requireLoopOption(nonNegative(rerender_shift_m) && nonNegative(rerender_shift_rad), "rerender_shift_* must be ≥ 0");
+  requireLoopOption(submap.levels >= 1 && submap.levels <= 8, "submap.levels must be in [1, 8]");
+  requireLoopOption(submap.unknown_probability >= 0.0f && submap.unknown_probability <= 1.0f,
           "submap.unknown_probability must be in [0, 1]");
-  require(nonNegative(submap.max_refinement_shift_m) && nonNegative(submap.max_refinement_shift_rad),
+  requireLoopOption(nonNegative(submap.max_refinement_shift_m) && nonNegative(submap.max_refinement_shift_rad),
           "submap.max_refinement_shift_* must be ≥ 0");
-  require(nonNegative(submap.ambiguity_radius_m) && nonNegative(submap.ambiguity_window_m) &&
+  requireLoopOption(nonNegative(submap.ambiguity_radius_m) && nonNegative(submap.ambiguity_window_m) &&
               submap.ambiguity_window_m <= 50.0 &&
               submap.ambiguity_window_rad >= 0.0 && submap.ambiguity_window_rad <= 3.14159 &&
               std::isfinite(submap.ambiguity_margin),

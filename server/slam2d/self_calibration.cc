@@ -13,7 +13,6 @@
 namespace rmap::slam2d {
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 /// One usable reading in log space, tagged with its surface patch.
 struct LogReading {
@@ -363,7 +362,7 @@ IntensityCalibration selfCalibrate(const std::vector<IntensityObservation>& obse
       readings.push_back(r);
     }
   }
-  const LogModelFit fit = fitUnsaturated(readings, std::vector<double>(patch_of.size(), kNaN),
+  const LogModelFit fit = fitUnsaturated(readings, std::vector<double>(patch_of.size(), std::numeric_limits<double>::quiet_NaN()),
                                          options.min_views_per_cell, options.fit, "selfCalibrate");
   std::vector<double> cell_log_rho;
   for (double l : fit.log_reflectivity) {

@@ -25,7 +25,7 @@ namespace rmap::testing {
 namespace {
 
 // Small limits, so that crossing each one is quick; one extra browser Origin.
-const std::string kConfig = std::string(kRoleTokensYaml) +
+const std::string kBadInputConfig = std::string(kRoleTokensYaml) +
                             "  allowed_origins: [\"https://viewer.example\"]\n"
                             "limits:\n  max_frame_bytes: 1048576\n  max_body_bytes: 1048576\n"
                             "  max_batch_points: 1000\n  max_points_per_cloud: 20000\n";
@@ -33,7 +33,7 @@ const std::string kConfig = std::string(kRoleTokensYaml) +
 class BadInput : public ::testing::Test {
  protected:
   void SetUp() override {
-    rmapd_ = std::make_unique<RmapdProcess>(dir_.path() / "data", kConfig);
+    rmapd_ = std::make_unique<RmapdProcess>(dir_.path() / "data", kBadInputConfig);
     // One good cloud so there is a map whose version must not move.
     const client::SimScene scene = client::makeSimScene(2);
     good_ = sceneClouds(scene, 1, 9).front();

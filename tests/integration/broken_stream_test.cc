@@ -27,8 +27,8 @@ namespace asio = boost::asio;
 namespace websocket = boost::beast::websocket;
 using tcp = asio::ip::tcp;
 
-constexpr const char* kMap = "broken";
-constexpr const char* kConfig = "maps:\n  fusion_tolerance_log_odds: 0\n";
+constexpr const char* kBrokenMap = "broken";
+constexpr const char* kBrokenStreamConfig = "maps:\n  fusion_tolerance_log_odds: 0\n";
 
 v1::RobotMessage cloudWithSeq(uint64_t index, uint64_t seq) {
   v1::RobotMessage m = columnCloud(index, static_cast<int64_t>(seq));
@@ -65,7 +65,7 @@ void expectClouds(client::HttpClient& http, const std::map<uint64_t, bool>& clou
       in.push_back(expected);
     }
   }
-  const v1::OccupancyBatchResponse served = batchQuery(http, kMap, probes);
+  const v1::OccupancyBatchResponse served = batchQuery(http, kBrokenMap, probes);
   ASSERT_EQ(static_cast<size_t>(served.states_size()), probes.size());
   for (size_t i = 0; i < probes.size(); ++i) {
     const int i32 = static_cast<int>(i);
@@ -100,7 +100,7 @@ class BrokenStream : public ::testing::Test {
     client::RobotClientOptions options;
     options.server_url = rmapd_.wsUrl();
     options.hello.set_robot_id(robot_id);
-    options.hello.set_map(kMap);
+    options.hello.set_map(kBrokenMap);
     options.max_in_flight = max_in_flight;
     auto robot = std::make_unique<client::RobotClient>(options);
     robot->onAck([this](const v1::Ack& ack, std::chrono::nanoseconds) {
@@ -122,7 +122,7 @@ class BrokenStream : public ::testing::Test {
   }
 
   TempDir dir_{"rmap-broken"};
-  RmapdProcess rmapd_{dir_.path() / "data", kConfig};
+  RmapdProcess rmapd_{dir_.path() / "data", kBrokenStreamConfig};
   client::HttpClient http_{rmapd_.httpUrl()};
   std::mutex mutex_;
   std::condition_variable errors_cv_;
@@ -140,7 +140,7 @@ TEST_F(BrokenStream, HalfAFrameThenADroppedSocketAppliesOnlyTheWholeFrames) {
     ws.binary(true);
     v1::RobotMessage hello;
     hello.mutable_hello()->set_robot_id("half-bot");
-    hello.mutable_hello()->set_map(kMap);
+    hello.mutable_hello()->set_map(kBrokenMap);
     ws.write(asio::buffer(hello.SerializeAsString()));
     boost::beast::flat_buffer buffer;
     ws.read(buffer);

@@ -38,7 +38,7 @@ constexpr const char* kScanMap = "cycles-2d";
 
 // Snapshots every 0.2 s, so kills land before, during and after them too;
 // fusion tolerance 0 keeps every cell's probability exact.
-constexpr const char* kConfig = R"(
+constexpr const char* kFaultConfig = R"(
 snapshot_interval_s: 0.2
 maps:
   fusion_tolerance_log_odds: 0
@@ -219,7 +219,7 @@ TEST(FaultCycles, Kill9AtRandomMomentsLosesNothingAcknowledgedAndAppliesNothingT
   uint64_t in_flight_logged = 0, in_flight_unlogged = 0;
   for (int cycle = 0; cycle < kCycles; ++cycle) {
     SCOPED_TRACE("cycle " + std::to_string(cycle));
-    RmapdProcess rmapd(data, kConfig);
+    RmapdProcess rmapd(data, kFaultConfig);
     client::HttpClient http(rmapd.httpUrl());
     // Recovery: the map holds what the log holds, no more.
     expectMapHolds(http, cloud_tracks, {logged[0], logged[1]}, logged[2], "after restart");
@@ -273,7 +273,7 @@ TEST(FaultCycles, Kill9AtRandomMomentsLosesNothingAcknowledgedAndAppliesNothingT
   }
 
   // A last start after the last kill: everything acknowledged is back, the rest is resent, then a clean stop.
-  RmapdProcess rmapd(data, kConfig);
+  RmapdProcess rmapd(data, kFaultConfig);
   client::HttpClient http(rmapd.httpUrl());
   expectMapHolds(http, cloud_tracks, {logged[0], logged[1]}, logged[2], "after the last restart");
   for (size_t t = 0; t < tracks.size(); ++t) {

@@ -66,10 +66,6 @@ size_t expectSameOccupancy(client::HttpClient& http, const std::string& map, con
   return occupied;
 }
 
-void writeFile(const std::filesystem::path& path, const std::string& bytes) {
-  std::ofstream(path, std::ios::binary).write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-}
-
 class Import : public ::testing::Test {
  protected:
   std::string importArgs(const RmapdProcess& rmapd, const std::string& map, const std::filesystem::path& file) const {

@@ -27,7 +27,7 @@
 namespace rmap::testing {
 namespace {
 
-constexpr double kLaserHeight_m = 1.0;
+constexpr double kCrossingLaserHeight_m = 1.0;
 constexpr int64_t kStepNs = 100'000'000;
 
 /// The tour driven the other way: reversed, each pose turned to face its new direction of travel.
@@ -76,15 +76,15 @@ TEST(LoopClosure, TwoRobotsCrossingOnOneMapCloseALoopAndTheirTrajectoriesAreCorr
   building.max_furniture_per_room = 1;
   sim::BuildingLayout layout;
   sim::VoxelWorld world = sim::makeBuilding(building, 3, &layout);
-  client::extendMarkersToLaserPlane(world, layout, building.floor_height_m, kLaserHeight_m);
+  client::extendMarkersToLaserPlane(world, layout, building.floor_height_m, kCrossingLaserHeight_m);
   sim::TrajectoryOptions path;
-  path.sensor_height_m = kLaserHeight_m;
+  path.sensor_height_m = kCrossingLaserHeight_m;
   path.num_poses = 200;
   path.step_m = 0.26;
   const std::vector<Eigen::Isometry3d> tour = sim::planTrajectory(world, path, 5);
   client::Laser2dRobotOptions laser;
   laser.laser = sim::Laser2dModel::sickLike();
-  laser.mount_height_m = kLaserHeight_m;
+  laser.mount_height_m = kCrossingLaserHeight_m;
   // Drift the SLAM's front end has to live with until a loop closes.
   laser.odometry_forward_sigma = 0.1;
   laser.odometry_heading_sigma_rad = 0.04;
@@ -254,7 +254,7 @@ TEST(LoopClosure, TwoRobotsCrossingOnOneMapCloseALoopAndTheirTrajectoriesAreCorr
   };
   char box[200];
   std::snprintf(box, sizeof box, "/v1/maps/shared/occupancy/box?min=%f,%f,%f&max=%f,%f,%f&limit=100000", origin_x,
-                origin_y, kLaserHeight_m + 0.01, origin_x + width * r2, origin_y + height * r2, kLaserHeight_m + 0.01);
+                origin_y, kCrossingLaserHeight_m + 0.01, origin_x + width * r2, origin_y + height * r2, kCrossingLaserHeight_m + 0.01);
   const nlohmann::json cuboids = getJson(http, box).at("cuboids");
   const double r3 = getJson(http, "/v1/maps/shared").at("resolution_m").get<double>();
   size_t occupied3d = 0, on_free = 0;

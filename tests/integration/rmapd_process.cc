@@ -31,6 +31,14 @@ TempDir::~TempDir() {
   fs::remove_all(path_, ignored);
 }
 
+void writeFile(const fs::path& path, const std::string& bytes) {
+  if (path.has_parent_path()) fs::create_directories(path.parent_path());
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  if (!out.write(bytes.data(), static_cast<std::streamsize>(bytes.size())) || !out.flush()) {
+    throw std::runtime_error("cannot write " + path.string());
+  }
+}
+
 const char* rmapdPath() { return RMAPD_PATH; }
 const char* rmapCliPath() { return RMAP_CLI_PATH; }
 
@@ -44,7 +52,7 @@ RmapdProcess::RmapdProcess(const fs::path& data_dir, const std::string& config_y
   }
   if (!config_yaml.empty()) {
     const fs::path config = base / (data_dir.filename().string() + "-config.yaml");
-    std::ofstream(config) << config_yaml;
+    writeFile(config, config_yaml);
     args.push_back("--config");
     args.push_back(config.string());
   }

@@ -17,6 +17,10 @@ const char* rmapdPath();
 /// The rmap CLI binary of this build.
 const char* rmapCliPath();
 
+/// Writes `bytes` to `path` (creating its folders), replacing what was there.
+/// @throws std::runtime_error when it cannot
+void writeFile(const std::filesystem::path& path, const std::string& bytes);
+
 /// A fresh directory under the system temp dir, removed by the destructor.
 class TempDir {
  public:

@@ -36,10 +36,10 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr const char* kMap = "full";
+constexpr const char* kFullMap = "full";
 constexpr const char* kRobot = "full-bot";
 // Snapshots every 0.3 s: one taken after the space is back must not cover poses a failed write lost.
-constexpr const char* kConfig = "snapshot_interval_s: 0.3\nmaps:\n  fusion_tolerance_log_odds: 0\n";
+constexpr const char* kStorageConfig = "snapshot_interval_s: 0.3\nmaps:\n  fusion_tolerance_log_odds: 0\n";
 
 /// Sets the soft file size limit of a running process (the hard one stays).
 void setFileSizeLimit(pid_t pid, rlim_t bytes) {
@@ -56,7 +56,7 @@ class OneByOne {
     client::RobotClientOptions options;
     options.server_url = url;
     options.hello.set_robot_id(kRobot);
-    options.hello.set_map(kMap);
+    options.hello.set_map(kFullMap);
     options.timeout = std::chrono::seconds(10);
     robot_ = std::make_unique<client::RobotClient>(options);
     robot_->onAck([this](const v1::Ack& ack, std::chrono::nanoseconds) {
@@ -113,7 +113,7 @@ void expectInMap(client::HttpClient& http, uint64_t acked, const std::vector<uin
   for (const uint64_t seq : refused) {
     for (const Eigen::Vector3d& p : columnEndpoints(seq - 1)) probes.push_back(p);
   }
-  const v1::OccupancyBatchResponse served = batchQuery(http, kMap, probes);
+  const v1::OccupancyBatchResponse served = batchQuery(http, kFullMap, probes);
   ASSERT_EQ(static_cast<size_t>(served.states_size()), probes.size());
   for (size_t i = 0; i < probes.size(); ++i) {
     const int i32 = static_cast<int>(i);
@@ -167,7 +167,7 @@ std::vector<uint64_t> fillUntilRefused(OneByOne& robot, uint64_t& next_seq, uint
 TEST(StorageFaults, FullDiskStopsAcknowledgementsKeepsReadsAndLosesNothing) {
   TempDir dir("rmap-full");
   const fs::path data = dir.path() / "data";
-  auto rmapd = std::make_unique<RmapdProcess>(data, kConfig);
+  auto rmapd = std::make_unique<RmapdProcess>(data, kStorageConfig);
   auto robot = std::make_unique<OneByOne>(rmapd->wsUrl());
   uint64_t next_seq = 1, acked = 0;
   for (; next_seq <= 20; ++next_seq, ++acked) ASSERT_TRUE(robot->send(next_seq)) << "seq " << next_seq;
@@ -197,7 +197,7 @@ TEST(StorageFaults, FullDiskStopsAcknowledgementsKeepsReadsAndLosesNothing) {
     client::RobotClientOptions options;
     options.server_url = rmapd->wsUrl();
     options.hello.set_robot_id("late-bot");
-    options.hello.set_map(kMap);
+    options.hello.set_map(kFullMap);
     client::RobotClient late(options);
     try {
       late.connect();
@@ -237,7 +237,7 @@ TEST(StorageFaults, FullDiskStopsAcknowledgementsKeepsReadsAndLosesNothing) {
   std::iota(expected.begin(), expected.end(), 1);
   EXPECT_EQ(copy.seqs.at(kRobot), expected) << "the log is not exactly the acknowledged clouds";
 
-  rmapd = std::make_unique<RmapdProcess>(data, kConfig);
+  rmapd = std::make_unique<RmapdProcess>(data, kStorageConfig);
   robot = std::make_unique<OneByOne>(rmapd->wsUrl());
   EXPECT_EQ(robot->lastDurable(), acked);
   client::HttpClient after(rmapd->httpUrl());

@@ -20,7 +20,7 @@ namespace fs = std::filesystem;
 namespace beast = boost::beast;
 namespace http = beast::http;
 
-constexpr const char* kConfig = R"(
+constexpr const char* kViewerConfig = R"(
 auth:
   tokens:
     - {token: viewer-token-1, role: viewer}
@@ -31,11 +31,6 @@ constexpr const char* kIndex = R"(<!doctype html>
 <script type="importmap">{"imports":{"three":"/node_modules/three/build/three.module.js","three/addons/":"/node_modules/three/examples/jsm/"}}</script>
 <script type="module" src="/app/main.js"></script></head><body></body></html>
 )";
-
-void writeFile(const fs::path& path, const std::string& text) {
-  fs::create_directories(path.parent_path());
-  std::ofstream(path, std::ios::binary) << text;
-}
 
 class WebViewer : public ::testing::Test {
  protected:
@@ -49,7 +44,7 @@ class WebViewer : public ::testing::Test {
     writeFile(web / "node_modules" / "three" / "build" / "three.module.js", three_);
     writeFile(web / "node_modules" / "three" / "examples" / "jsm" / "controls" / "OrbitControls.js",
               "import { EventDispatcher } from 'three';\n");
-    rmapd_ = std::make_unique<RmapdProcess>(dir_.path() / "data", kConfig, std::chrono::seconds(60),
+    rmapd_ = std::make_unique<RmapdProcess>(dir_.path() / "data", kViewerConfig, std::chrono::seconds(60),
                                             std::vector<std::string>{"--web-root", web.string()});
   }
 

@@ -68,7 +68,7 @@ bool readFramesPose(const std::string& path, Eigen::Matrix4d& pose) {
   return found;
 }
 
-Eigen::Matrix4d readPoseFile(const std::string& path) {
+Eigen::Matrix4d readUosPose(const std::string& path) {
   const std::string text = readFileMaybeCompressed(path);
   TextLines lines(text);
   std::string_view line;
@@ -160,7 +160,7 @@ std::vector<PointScan> readUos3dtk(const std::string& dir, UosReadStats* stats) 
     if (fs::exists(frames) && readFramesPose(frames, pose)) {
       ++s.poses_from_frames;
     } else if (fs::exists(pose_file)) {
-      pose = readPoseFile(pose_file);
+      pose = readUosPose(pose_file);
     } else {
       throw std::runtime_error(scanName(dir, i, ".3d") + ": neither .frames nor .pose beside it");
     }

@@ -14,8 +14,9 @@ namespace {
 
 namespace http = boost::beast::http;
 using nlohmann::json;
+using testing::header;
 
-const net::Peer kLoopback{"127.0.0.1", 40000, true};
+const net::Peer kApiClient{"127.0.0.1", 40000, true};
 
 /// An API over a service in a fresh data directory, in loopback-only mode (every request is admin).
 class HttpApiTest : public ::testing::Test {
@@ -24,7 +25,7 @@ class HttpApiTest : public ::testing::Test {
                      std::initializer_list<std::pair<http::field, std::string>> headers = {}) {
     net::Request request{method, target, 11};
     for (const auto& [field, value] : headers) request.set(field, value);
-    return api_.handle(request, kLoopback);
+    return api_.handle(request, kApiClient);
   }
   net::Response get(const std::string& target,
                     std::initializer_list<std::pair<http::field, std::string>> headers = {}) {
@@ -36,11 +37,6 @@ class HttpApiTest : public ::testing::Test {
   Authenticator auth_{AuthConfig{}};
   HttpApi api_{service_, auth_};
 };
-
-std::string header(const net::Response& response, http::field field) {
-  const auto it = response.find(field);
-  return it == response.end() ? std::string() : std::string(it->value());
-}
 
 TEST_F(HttpApiTest, MethodNotAllowedNamesTheMethodsOfTheRoute) {
   service_.openMap("lab", 0.0);
@@ -170,7 +166,7 @@ TEST_F(HttpApiTest, ImportedTreeExportsTheSameTreeAndIsRefusedTwice) {
   const std::string bt = wallBt();
   net::Request request{http::verb::post, "/v1/maps/room:import", 11};
   request.body() = bt;
-  net::Response response = api_.handle(request, kLoopback);
+  net::Response response = api_.handle(request, kApiClient);
   ASSERT_EQ(response.result_int(), 200) << response.body();
   const json answer = json::parse(response.body());
   EXPECT_TRUE(answer["created"].get<bool>());
@@ -186,23 +182,23 @@ TEST_F(HttpApiTest, ImportedTreeExportsTheSameTreeAndIsRefusedTwice) {
   EXPECT_EQ(response.body(), bt);
   // Not again without replace=true; nothing changed.
   const json before = json::parse(get("/v1/maps/room").body());
-  response = api_.handle(request, kLoopback);
+  response = api_.handle(request, kApiClient);
   EXPECT_EQ(response.result_int(), 409);
   EXPECT_EQ(json::parse(response.body())["error"]["code"], "map_not_empty");
   EXPECT_EQ(json::parse(get("/v1/maps/room").body())["version"], before["version"]);
   request.target("/v1/maps/room:import?replace=yes");
-  EXPECT_EQ(api_.handle(request, kLoopback).result_int(), 400);
+  EXPECT_EQ(api_.handle(request, kApiClient).result_int(), 400);
   request.target("/v1/maps/room:import?replace=true");
-  EXPECT_EQ(api_.handle(request, kLoopback).result_int(), 200);
+  EXPECT_EQ(api_.handle(request, kApiClient).result_int(), 200);
   // Only POST, a valid name, an OctoMap body.
   response = get("/v1/maps/room:import");
   EXPECT_EQ(response.result_int(), 405);
   EXPECT_EQ(header(response, http::field::allow), "POST");
   request.target("/v1/maps/bad%20name:import");
-  EXPECT_EQ(api_.handle(request, kLoopback).result_int(), 400);
+  EXPECT_EQ(api_.handle(request, kApiClient).result_int(), 400);
   request.target("/v1/maps/other:import");
   request.body() = "not a tree";
-  response = api_.handle(request, kLoopback);
+  response = api_.handle(request, kApiClient);
   EXPECT_EQ(response.result_int(), 400);
   EXPECT_NE(json::parse(response.body())["error"]["message"].get<std::string>().find("not an OctoMap file"),
             std::string::npos);
@@ -218,13 +214,13 @@ TEST(HttpApiImport, AnImportIsBackAfterARestart) {
     HttpApi api(service, auth);
     net::Request request{http::verb::post, "/v1/maps/room:import", 11};
     request.body() = bt;
-    ASSERT_EQ(api.handle(request, kLoopback).result_int(), 200);
+    ASSERT_EQ(api.handle(request, kApiClient).result_int(), 200);
   }
   MappingService service(testing::configIn(dir.path()));
   Authenticator auth{AuthConfig{}};
   HttpApi api(service, auth);
   net::Request request{http::verb::get, "/v1/maps/room/export.bt", 11};
-  const net::Response response = api.handle(request, kLoopback);
+  const net::Response response = api.handle(request, kApiClient);
   ASSERT_EQ(response.result_int(), 200);
   EXPECT_EQ(response.body(), bt);
 }
@@ -254,7 +250,7 @@ TEST(HttpApiRestart, TileETagsOfAnEarlierStartNeverMatch) {
     net::Request request{http::verb::get, "/v1/maps/lab/tiles/0/0/0/0", 11};
     request.set(http::field::accept, "application/json");
     if (!if_none_match.empty()) request.set(http::field::if_none_match, if_none_match);
-    return api.handle(request, kLoopback);
+    return api.handle(request, kApiClient);
   };
   std::string before;  // rebuilt from the log, then snapshotted at the stop
   {
@@ -273,7 +269,7 @@ TEST(HttpApiRestart, TileETagsOfAnEarlierStartNeverMatch) {
   EXPECT_EQ(tile(service, after).result_int(), 304);
   HttpApi api(service, auth);
   net::Request request{http::verb::get, "/v1/maps/lab/tileset.json", 11};
-  EXPECT_EQ(json::parse(api.handle(request, kLoopback).body())["epoch"], service.epoch());
+  EXPECT_EQ(json::parse(api.handle(request, kApiClient).body())["epoch"], service.epoch());
 }
 
 }  // namespace

@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <boost/beast/http/field.hpp>
 #include <chrono>
 #include <condition_variable>
 #include <memory>
@@ -19,6 +20,13 @@
 #include "rmap/v1/robot_stream.pb.h"
 
 namespace rmap::app::testing {
+
+/// A response header's value, empty when the response has none.
+template <class Field>
+std::string header(const net::Response& response, Field field) {
+  const auto it = response.find(field);
+  return it == response.end() ? std::string() : std::string(it->value());
+}
 
 inline Config configIn(const std::filesystem::path& data_dir) {
   Config config;

@@ -16,6 +16,7 @@ namespace {
 namespace fs = std::filesystem;
 namespace http = boost::beast::http;
 using nlohmann::json;
+using testing::header;
 
 constexpr const char* kImportMap = R"({"imports":{"three":"/node_modules/three/build/three.module.js"}})";
 /// SHA-256 of kImportMap in base64 (python3 hashlib), as the CSP names it.
@@ -24,16 +25,6 @@ constexpr const char* kImportMapHash = "'sha256-3J5ThQnhDolx6EqjqAMncTo9GpfA0Jp9
 void writeFile(const fs::path& path, const std::string& text) {
   fs::create_directories(path.parent_path());
   std::ofstream(path, std::ios::binary) << text;
-}
-
-std::string header(const net::Response& response, http::field field) {
-  const auto it = response.find(field);
-  return it == response.end() ? std::string() : std::string(it->value());
-}
-
-std::string header(const net::Response& response, const char* name) {
-  const auto it = response.find(name);
-  return it == response.end() ? std::string() : std::string(it->value());
 }
 
 /// An HttpApi with tokens configured (so the API needs one) over a web root in a temp dir:

@@ -13,7 +13,7 @@
 
 #include "datasets/slam_relations.h"
 
-#include "expect_parse_error.h"
+#include "dataset_test_support.h"
 
 namespace rmap::datasets {
 namespace {
@@ -29,7 +29,7 @@ std::string flaser(int n, const std::string& first, double r, const std::string&
   return s.str();
 }
 
-void expectError(const std::string& text, const std::string& part) {
+void expectCarmenError(const std::string& text, const std::string& part) {
   expectParseError([](const std::string& c) { parseCarmenLog(c, "t.log"); }, text, part);
 }
 
@@ -147,15 +147,15 @@ TEST(CarmenLog, RawOdometryDoesNotRestart) {
 
 TEST(CarmenLog, MalformedLinesNameTheLine) {
   const std::string good = flaser(3, "1", 1, "0 0 0 0 0 0", "1");
-  expectError(good + "FLASER 3 1 2 3 0 0 0 0 0 0 1 host\n", "t.log:2: FLASER needs 14 fields");
-  expectError(good + "FLASER 1 1 0 0 0 0 0 0 1 h 0\n", "t.log:2: FLASER beam count");
-  expectError("FLASER x\n", "t.log:1: malformed number \"x\"");
-  expectError(good + good + "ODOM 0 0 nan 0 0 0 1 h 0\n", "t.log:3: non-finite value");
-  expectError("ODOM 0 0 0 0 0 0 1 h\n", "t.log:1: ODOM needs 10 fields");
-  expectError("ODOM 0 0 0 0 0 0 1.5x3 h 0\n", "t.log:1: malformed number");
-  expectError("ROBOTLASER1 0 -1.5 3.1 0.5 80 0.01 0 2 1 1 1 5 0 0 0 0 0 0 0 0 0 0 0 1 h 0\n",
+  expectCarmenError(good + "FLASER 3 1 2 3 0 0 0 0 0 0 1 host\n", "t.log:2: FLASER needs 14 fields");
+  expectCarmenError(good + "FLASER 1 1 0 0 0 0 0 0 1 h 0\n", "t.log:2: FLASER beam count");
+  expectCarmenError("FLASER x\n", "t.log:1: malformed number \"x\"");
+  expectCarmenError(good + good + "ODOM 0 0 nan 0 0 0 1 h 0\n", "t.log:3: non-finite value");
+  expectCarmenError("ODOM 0 0 0 0 0 0 1 h\n", "t.log:1: ODOM needs 10 fields");
+  expectCarmenError("ODOM 0 0 0 0 0 0 1.5x3 h 0\n", "t.log:1: malformed number");
+  expectCarmenError("ROBOTLASER1 0 -1.5 3.1 0.5 80 0.01 0 2 1 1 1 5 0 0 0 0 0 0 0 0 0 0 0 1 h 0\n",
               "t.log:1: ROBOTLASER1 has 1 remissions for 2 beams");
-  expectError("ROBOTLASER1 0 -1.5 3.1 0.5 80 0.01 0 2 1 1 0 0 0 0 0 0 0 0 0 0 0 1 h 0\n",
+  expectCarmenError("ROBOTLASER1 0 -1.5 3.1 0.5 80 0.01 0 2 1 1 0 0 0 0 0 0 0 0 0 0 0 1 h 0\n",
               "t.log:1: ROBOTLASER1 needs 26 fields");
 }
 

@@ -5,7 +5,7 @@
 #include <cmath>
 #include <cstring>
 
-#include "expect_parse_error.h"
+#include "dataset_test_support.h"
 
 namespace rmap::datasets {
 namespace {

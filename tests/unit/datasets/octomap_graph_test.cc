@@ -7,7 +7,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "expect_parse_error.h"
+#include "dataset_test_support.h"
 
 namespace rmap::datasets {
 namespace {

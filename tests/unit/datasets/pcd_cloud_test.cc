@@ -5,19 +5,12 @@
 #include <cmath>
 #include <cstring>
 
-#include "expect_parse_error.h"
+#include "dataset_test_support.h"
 
 namespace rmap::datasets {
 namespace {
 
-template <class T>
-void put(std::string& out, T v) {
-  char b[sizeof(T)];
-  std::memcpy(b, &v, sizeof v);
-  out.append(b, sizeof b);
-}
-
-const auto kParse = [](const std::string& c) { parsePcdCloud(c, "t.pcd"); };
+const auto kParsePcd = [](const std::string& c) { parsePcdCloud(c, "t.pcd"); };
 
 TEST(PcdCloud, AsciiWithIntensity) {
   const PcdCloud cloud = parsePcdCloud(
@@ -35,10 +28,10 @@ TEST(PcdCloud, BinaryMixedTypesAndArrayField) {
       "VERSION .7\nFIELDS intensity normal x y z ring\nSIZE 2 4 8 8 8 1\nTYPE U F F F F U\nCOUNT 1 3 1 1 1 1\n"
       "WIDTH 1\nHEIGHT 2\nPOINTS 2\nDATA binary\n";
   for (int k = 0; k < 2; ++k) {
-    put(pcd, uint16_t(100 + k));
-    for (int n = 0; n < 3; ++n) put(pcd, 9.0f);
-    put(pcd, 1.0 + k), put(pcd, 2.0), put(pcd, -3.0);
-    put(pcd, uint8_t(7));
+    appendBinary(pcd, uint16_t(100 + k));
+    for (int n = 0; n < 3; ++n) appendBinary(pcd, 9.0f);
+    appendBinary(pcd, 1.0 + k), appendBinary(pcd, 2.0), appendBinary(pcd, -3.0);
+    appendBinary(pcd, uint8_t(7));
   }
   const PcdCloud cloud = parsePcdCloud(pcd, "t.pcd");
   ASSERT_EQ(cloud.points_m.size(), 2u);
@@ -49,7 +42,7 @@ TEST(PcdCloud, BinaryMixedTypesAndArrayField) {
 
 TEST(PcdCloud, NoIntensityAndNanPointsKept) {
   std::string pcd = "FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nWIDTH 2\nHEIGHT 1\nDATA binary\n";
-  for (float v : {1.0f, 1.0f, 1.0f, NAN, NAN, NAN}) put(pcd, v);
+  for (float v : {1.0f, 1.0f, 1.0f, NAN, NAN, NAN}) appendBinary(pcd, v);
   const PcdCloud cloud = parsePcdCloud(pcd, "t.pcd");
   ASSERT_EQ(cloud.points_m.size(), 2u);
   EXPECT_TRUE(cloud.intensities.empty());
@@ -58,19 +51,19 @@ TEST(PcdCloud, NoIntensityAndNanPointsKept) {
 
 TEST(PcdCloud, BadInputIsNamed) {
   const std::string head = "FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 2\nHEIGHT 1\nPOINTS 2\n";
-  expectParseError(kParse, head + "DATA ascii\n1 2 3\n4 5\n", "t.pcd:10: 2 values, expected 3");
-  expectParseError(kParse, head + "DATA ascii\n1 2 3\n", "truncated: 1 of 2 points");
-  expectParseError(kParse, head + "DATA ascii\n1 2 3\n4 x 6\n", "t.pcd:10");
+  expectParseError(kParsePcd, head + "DATA ascii\n1 2 3\n4 5\n", "t.pcd:10: 2 values, expected 3");
+  expectParseError(kParsePcd, head + "DATA ascii\n1 2 3\n", "truncated: 1 of 2 points");
+  expectParseError(kParsePcd, head + "DATA ascii\n1 2 3\n4 x 6\n", "t.pcd:10");
   const std::string binary = head + "DATA binary\n";
-  expectParseError(kParse, binary + std::string(20, '\0'), "offset " + std::to_string(binary.size()) + ": truncated");
-  expectParseError(kParse, head + "DATA binary_compressed\n", "binary_compressed is not supported");
-  expectParseError(kParse, "FIELDS x y\nSIZE 4 4\nTYPE F F\nWIDTH 1\nDATA ascii\n1 2\n", "must include x, y and z");
-  expectParseError(kParse, "FIELDS x y z\nSIZE 4 4\n", "t.pcd:2: SIZE lists 2 values for 3 FIELDS");
-  expectParseError(kParse, "FIELDS x y z\nSIZE 4 4 3\n", "SIZE must be 1, 2, 4 or 8");
-  expectParseError(kParse, "FIELDS x y z\nTYPE F F Q\n", "TYPE must be F, I or U");
-  expectParseError(kParse, "FIELDS x y z\nWIDTH 2\nHEIGHT 2\nPOINTS 3\nDATA ascii\n", "POINTS 3 is not WIDTH");
-  expectParseError(kParse, "FIELDS x y z\nWIDTH 1\n", "header ends without a DATA line");
-  expectParseError(kParse, "FIELDS x y z\nFOO 1\nDATA ascii\n", "t.pcd:2: unexpected header line");
+  expectParseError(kParsePcd, binary + std::string(20, '\0'), "offset " + std::to_string(binary.size()) + ": truncated");
+  expectParseError(kParsePcd, head + "DATA binary_compressed\n", "binary_compressed is not supported");
+  expectParseError(kParsePcd, "FIELDS x y\nSIZE 4 4\nTYPE F F\nWIDTH 1\nDATA ascii\n1 2\n", "must include x, y and z");
+  expectParseError(kParsePcd, "FIELDS x y z\nSIZE 4 4\n", "t.pcd:2: SIZE lists 2 values for 3 FIELDS");
+  expectParseError(kParsePcd, "FIELDS x y z\nSIZE 4 4 3\n", "SIZE must be 1, 2, 4 or 8");
+  expectParseError(kParsePcd, "FIELDS x y z\nTYPE F F Q\n", "TYPE must be F, I or U");
+  expectParseError(kParsePcd, "FIELDS x y z\nWIDTH 2\nHEIGHT 2\nPOINTS 3\nDATA ascii\n", "POINTS 3 is not WIDTH");
+  expectParseError(kParsePcd, "FIELDS x y z\nWIDTH 1\n", "header ends without a DATA line");
+  expectParseError(kParsePcd, "FIELDS x y z\nFOO 1\nDATA ascii\n", "t.pcd:2: unexpected header line");
 }
 
 }  // namespace

@@ -2,7 +2,7 @@
 
 #include <gtest/gtest.h>
 
-#include "expect_parse_error.h"
+#include "dataset_test_support.h"
 
 namespace rmap::datasets {
 namespace {

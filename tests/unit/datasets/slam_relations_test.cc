@@ -6,12 +6,12 @@
 #include <stdexcept>
 #include <string>
 
-#include "expect_parse_error.h"
+#include "dataset_test_support.h"
 
 namespace rmap::datasets {
 namespace {
 
-void expectError(const std::string& text, const std::string& part) {
+void expectRelationsError(const std::string& text, const std::string& part) {
   expectParseError([](const std::string& c) { parseSlamRelations(c, "r.txt"); }, text, part);
 }
 
@@ -31,10 +31,10 @@ TEST(SlamRelations, ParsesStampsAndMotion) {
 }
 
 TEST(SlamRelations, RejectsMalformedLines) {
-  expectError("1 2 0 0 0 0 0\n", "r.txt:1: expected t1 t2 x y z roll pitch yaw, got 7");
-  expectError("1 2 0 0 0.1 0 0 0\n", "r.txt:1: not a planar relation");
-  expectError("1 2 0 0 0 0 0 0\n1 2 0 inf 0 0 0 0\n", "r.txt:2: non-finite");
-  expectError("1 x 0 0 0 0 0 0\n", "r.txt:1: malformed number");
+  expectRelationsError("1 2 0 0 0 0 0\n", "r.txt:1: expected t1 t2 x y z roll pitch yaw, got 7");
+  expectRelationsError("1 2 0 0 0.1 0 0 0\n", "r.txt:1: not a planar relation");
+  expectRelationsError("1 2 0 0 0 0 0 0\n1 2 0 inf 0 0 0 0\n", "r.txt:2: non-finite");
+  expectRelationsError("1 x 0 0 0 0 0 0\n", "r.txt:1: malformed number");
 }
 
 }  // namespace

@@ -11,16 +11,15 @@
 #include <string>
 #include <vector>
 
+#include "dataset_test_support.h"
+
 namespace rmap::datasets {
 namespace {
 
 namespace fs = std::filesystem;
 
-void expectPoint(const Eigen::Vector3f& p, double x, double y, double z) {
-  EXPECT_NEAR(p.x(), x, 1e-5);
-  EXPECT_NEAR(p.y(), y, 1e-5);
-  EXPECT_NEAR(p.z(), z, 1e-5);
-}
+/// Points come from centimetres read into floats: 1e-5 m covers their rounding.
+void expectPointCm(const Eigen::Vector3f& p, double x, double y, double z) { expectPoint(p, x, y, z, 1e-5); }
 
 class Uos3dtkTest : public ::testing::Test {
  protected:
@@ -75,21 +74,21 @@ TEST_F(Uos3dtkTest, ReadsPosesAndConvertsFrames) {
   ASSERT_EQ(scans.size(), 3u);
 
   // Identity pose: uos (x right, y up, z forward, cm) → (z, −x, y) / 100.
-  expectPoint(scans[0].sensor_origin_m, 0, 0, 0);
+  expectPointCm(scans[0].sensor_origin_m, 0, 0, 0);
   ASSERT_EQ(scans[0].points_m.size(), 2u);
-  expectPoint(scans[0].points_m[0], 0, -1, 0);
-  expectPoint(scans[0].points_m[1], 0, 0, 2);
+  expectPointCm(scans[0].points_m[0], 0, -1, 0);
+  expectPointCm(scans[0].points_m[1], 0, 0, 2);
 
   // .frames: R·(0,0,100) = (100,0,0), plus (100,0,200) → (200,0,200) cm.
-  expectPoint(scans[1].sensor_origin_m, 2, -1, 0);
+  expectPointCm(scans[1].sensor_origin_m, 2, -1, 0);
   ASSERT_EQ(scans[1].points_m.size(), 1u);
-  expectPoint(scans[1].points_m[0], 2, -2, 0);
+  expectPointCm(scans[1].points_m[0], 2, -2, 0);
 
   // .pose with Rx(90°)·Ry(90°): Ry turns (0,0,100) into (100,0,0), Rx keeps it;
   // plus (100,0,0) → (200,0,0) cm. The other order would give (100,−100,0).
-  expectPoint(scans[2].sensor_origin_m, 0, -1, 0);
+  expectPointCm(scans[2].sensor_origin_m, 0, -1, 0);
   ASSERT_EQ(scans[2].points_m.size(), 1u);
-  expectPoint(scans[2].points_m[0], 0, -2, 0);
+  expectPointCm(scans[2].points_m[0], 0, -2, 0);
 
   EXPECT_EQ(stats.points_read, 7u);
   EXPECT_EQ(stats.dropped_near, 1u);
@@ -115,7 +114,7 @@ TEST_F(Uos3dtkTest, EmptyFramesFallsBackToPose) {
   write("scan000.pose", "0 0 50\n0 0 0\n");
   UosReadStats stats;
   const auto scans = readUos3dtk(dir_.string(), &stats);
-  expectPoint(scans.at(0).points_m.at(0), 1.5, 0, 0);
+  expectPointCm(scans.at(0).points_m.at(0), 1.5, 0, 0);
   EXPECT_EQ(stats.poses_from_frames, 0u);
 }
 

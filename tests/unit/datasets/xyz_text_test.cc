@@ -8,18 +8,12 @@
 #include <stdexcept>
 #include <string>
 
-#include "expect_parse_error.h"
+#include "dataset_test_support.h"
 
 namespace rmap::datasets {
 namespace {
 
-void expectPoint(const Eigen::Vector3f& p, double x, double y, double z) {
-  EXPECT_NEAR(p.x(), x, 1e-6);
-  EXPECT_NEAR(p.y(), y, 1e-6);
-  EXPECT_NEAR(p.z(), z, 1e-6);
-}
-
-void expectError(const std::string& text, const std::string& part) {
+void expectXyzError(const std::string& text, const std::string& part) {
   expectParseError([](const std::string& c) { parseXyzText(c, "test.dat"); }, text, part);
 }
 
@@ -78,14 +72,14 @@ TEST(XyzText, PointsBeforeTheFirstNodeKeepTheOrigin) {
 }
 
 TEST(XyzText, ErrorsNameTheLine) {
-  expectError("1 2 3\n1 2 x\n", "test.dat:2: malformed number \"x\"");
-  expectError("1 2 3\n\n1 2\n", "test.dat:3: expected 3 numbers");
-  expectError("1 2 3 4\n", "test.dat:1: expected 3 numbers");
-  expectError("1 2 3.5.6\n", "test.dat:1: malformed number");
-  expectError("1 nan 3\n", "test.dat:1: non-finite");
-  expectError("1 2 1e999\n", "test.dat:1: number out of range");
-  expectError("NODE 1 2 3 0 0\n", "test.dat:1: NODE needs x y z roll pitch yaw, got 5");
-  expectError("NODE 1 2 3 0 0 zz\n", "test.dat:1: malformed number \"zz\"");
+  expectXyzError("1 2 3\n1 2 x\n", "test.dat:2: malformed number \"x\"");
+  expectXyzError("1 2 3\n\n1 2\n", "test.dat:3: expected 3 numbers");
+  expectXyzError("1 2 3 4\n", "test.dat:1: expected 3 numbers");
+  expectXyzError("1 2 3.5.6\n", "test.dat:1: malformed number");
+  expectXyzError("1 nan 3\n", "test.dat:1: non-finite");
+  expectXyzError("1 2 1e999\n", "test.dat:1: number out of range");
+  expectXyzError("NODE 1 2 3 0 0\n", "test.dat:1: NODE needs x y z roll pitch yaw, got 5");
+  expectXyzError("NODE 1 2 3 0 0 zz\n", "test.dat:1: malformed number \"zz\"");
 }
 
 TEST(XyzText, MissingFileNamesPath) {

@@ -21,7 +21,7 @@ struct Words {
   }
 };
 
-std::vector<uint64_t> randomDescriptor(std::mt19937_64& rng) { return {rng(), rng(), rng(), rng()}; }
+std::vector<uint64_t> randomWordDescriptor(std::mt19937_64& rng) { return {rng(), rng(), rng(), rng()}; }
 
 std::vector<uint64_t> flipped(std::vector<uint64_t> d, int flips, std::mt19937_64& rng) {
   std::uniform_int_distribution<int> bit(0, 255);
@@ -40,7 +40,7 @@ double nearWordRecall(int trees) {
   std::vector<std::vector<uint64_t>> queries;
   std::vector<int32_t> expected;
   for (int i = 0; i < 20000; ++i) {
-    const std::vector<uint64_t> d = randomDescriptor(rng);
+    const std::vector<uint64_t> d = randomWordDescriptor(rng);
     tree.insert(static_cast<int32_t>(w.add(d.data())));
     if (i % 100 == 0) {
       queries.push_back(flipped(d, 20, rng));
@@ -72,7 +72,7 @@ TEST(WordTree, RemovedAndExcludedWordsAreNotReturned) {
   Words w;
   WordTree tree(&w.storage, kBlocks, WordTreeOptions{.branching = 4, .leaf_size = 8, .max_checks = 1000});
   std::mt19937_64 rng(3);
-  for (int i = 0; i < 300; ++i) tree.insert(static_cast<int32_t>(w.add(randomDescriptor(rng).data())));
+  for (int i = 0; i < 300; ++i) tree.insert(static_cast<int32_t>(w.add(randomWordDescriptor(rng).data())));
   const uint64_t* d5 = w.storage.data() + 5 * kBlocks;
   NearestWords n = tree.search(d5);
   EXPECT_EQ(n.first, 5);

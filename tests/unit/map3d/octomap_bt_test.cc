@@ -21,10 +21,10 @@ namespace {
 const std::string kGebPath = std::string(RMAP_SHARED_DATA_DIR) + "/octomap/geb079.bt";
 
 /// Comparable form of a leaf: min cell, edge in cells, state.
-using LeafTuple = std::tuple<int32_t, int32_t, int32_t, int32_t, bool>;
+using BtLeafTuple = std::tuple<int32_t, int32_t, int32_t, int32_t, bool>;
 
-std::vector<LeafTuple> sortedLeaves(const std::vector<BtLeaf>& leaves) {
-  std::vector<LeafTuple> out;
+std::vector<BtLeafTuple> sortedLeaves(const std::vector<BtLeaf>& leaves) {
+  std::vector<BtLeafTuple> out;
   out.reserve(leaves.size());
   for (const BtLeaf& l : leaves) out.emplace_back(l.min_cell.x, l.min_cell.y, l.min_cell.z, l.size_cells, l.occupied);
   std::sort(out.begin(), out.end());
@@ -32,8 +32,8 @@ std::vector<LeafTuple> sortedLeaves(const std::vector<BtLeaf>& leaves) {
 }
 
 /// Leaves of an OctoMap tree in the same form (keys shifted to cell indices).
-std::vector<LeafTuple> sortedLeaves(const octomap::OcTree& tree) {
-  std::vector<LeafTuple> out;
+std::vector<BtLeafTuple> sortedLeaves(const octomap::OcTree& tree) {
+  std::vector<BtLeafTuple> out;
   for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
     const int32_t size = int32_t{1} << (16 - it.getDepth());
     // The iterator's key is the cube's centre key; clearing the low bits gives its corner.
@@ -107,7 +107,7 @@ TEST(OctomapBt, ParsesGeb079LikeOctomap) {
   const auto got = sortedLeaves(parsed.leaves);
   ASSERT_EQ(got.size(), expected.size());
   const auto occupied = [](const auto& v) {
-    return std::count_if(v.begin(), v.end(), [](const LeafTuple& t) { return std::get<4>(t); });
+    return std::count_if(v.begin(), v.end(), [](const BtLeafTuple& t) { return std::get<4>(t); });
   };
   EXPECT_EQ(occupied(got), occupied(expected));
   EXPECT_EQ(got.size() - occupied(got), expected.size() - occupied(expected));
@@ -146,9 +146,9 @@ TEST(OctomapBt, WrittenCellsReadBackByOctomap) {
   EXPECT_EQ(leaf_cells, cells.size());
   // The two uniform octants are pruned into 2-cell leaves, the mixed one is not.
   const auto leaves = sortedLeaves(tree);
-  EXPECT_EQ(std::count(leaves.begin(), leaves.end(), LeafTuple{4, 6, 8, 2, false}), 1);
-  EXPECT_EQ(std::count(leaves.begin(), leaves.end(), LeafTuple{-8, -2, -4, 2, true}), 1);
-  EXPECT_EQ(std::count_if(leaves.begin(), leaves.end(), [](const LeafTuple& l) { return std::get<3>(l) > 2; }), 0);
+  EXPECT_EQ(std::count(leaves.begin(), leaves.end(), BtLeafTuple{4, 6, 8, 2, false}), 1);
+  EXPECT_EQ(std::count(leaves.begin(), leaves.end(), BtLeafTuple{-8, -2, -4, 2, true}), 1);
+  EXPECT_EQ(std::count_if(leaves.begin(), leaves.end(), [](const BtLeafTuple& l) { return std::get<3>(l) > 2; }), 0);
   EXPECT_EQ(leaves.size(), 2u + 8u + 6u);
 }
 
@@ -222,7 +222,7 @@ TEST(OctomapBt, Geb079RewrittenGivesSameLeaves) {
   EXPECT_EQ(rewritten->size(), original.size());
 }
 
-void expectRejected(const std::string& bytes, const std::string& message_part) {
+void expectBtRejected(const std::string& bytes, const std::string& message_part) {
   try {
     parseBt(bytes);
     ADD_FAILURE() << "accepted input; expected an error containing \"" << message_part << "\"";
@@ -234,20 +234,20 @@ void expectRejected(const std::string& bytes, const std::string& message_part) {
 std::string header(const std::string& lines) { return "# Octomap OcTree binary file\n" + lines; }
 
 TEST(OctomapBt, RejectsBadHeaders) {
-  expectRejected("", "first line");
-  expectRejected("# Octomap OcTree file\nid OcTree\nsize 0\nres 0.1\ndata\n", "first line");
-  expectRejected(header("id ColorOcTree\nsize 0\nres 0.1\ndata\n"), "unsupported tree id");
-  expectRejected(header("size 0\nres 0.1\ndata\n"), "no id");
-  expectRejected(header("id OcTree\nsize 0\ndata\n"), "no res");
-  expectRejected(header("id OcTree\nsize 0\nres -0.1\ndata\n"), "res must be");
-  expectRejected(header("id OcTree\nsize 0\nres 0\ndata\n"), "res must be");
-  expectRejected(header("id OcTree\nsize 0\nres inf\ndata\n"), "res must be");
-  expectRejected(header("id OcTree\nsize 0\nres nan\ndata\n"), "res must be");
-  expectRejected(header("id OcTree\nsize 0\nres 0.1x\ndata\n"), "bad res");
-  expectRejected(header("id OcTree\nres 0.1\ndata\n"), "no size");
-  expectRejected(header("id OcTree\nsize -3\nres 0.1\ndata\n"), "bad size");
-  expectRejected(header("id OcTree\nsize 0\nres 0.1\n"), "before the \"data\"");
-  expectRejected(header("id OcTree\nsize 0\nres 0.1\ndata\nxx"), "after a header with size 0");
+  expectBtRejected("", "first line");
+  expectBtRejected("# Octomap OcTree file\nid OcTree\nsize 0\nres 0.1\ndata\n", "first line");
+  expectBtRejected(header("id ColorOcTree\nsize 0\nres 0.1\ndata\n"), "unsupported tree id");
+  expectBtRejected(header("size 0\nres 0.1\ndata\n"), "no id");
+  expectBtRejected(header("id OcTree\nsize 0\ndata\n"), "no res");
+  expectBtRejected(header("id OcTree\nsize 0\nres -0.1\ndata\n"), "res must be");
+  expectBtRejected(header("id OcTree\nsize 0\nres 0\ndata\n"), "res must be");
+  expectBtRejected(header("id OcTree\nsize 0\nres inf\ndata\n"), "res must be");
+  expectBtRejected(header("id OcTree\nsize 0\nres nan\ndata\n"), "res must be");
+  expectBtRejected(header("id OcTree\nsize 0\nres 0.1x\ndata\n"), "bad res");
+  expectBtRejected(header("id OcTree\nres 0.1\ndata\n"), "no size");
+  expectBtRejected(header("id OcTree\nsize -3\nres 0.1\ndata\n"), "bad size");
+  expectBtRejected(header("id OcTree\nsize 0\nres 0.1\n"), "before the \"data\"");
+  expectBtRejected(header("id OcTree\nsize 0\nres 0.1\ndata\nxx"), "after a header with size 0");
 }
 
 TEST(OctomapBt, RejectsBadData) {
@@ -255,16 +255,16 @@ TEST(OctomapBt, RejectsBadData) {
   const size_t data_at = good.find("data\n") + 5;
   ASSERT_LT(data_at + 4, good.size());
   for (size_t cut : {data_at, data_at + 1, data_at + 2, (data_at + good.size()) / 2, good.size() - 1}) {
-    expectRejected(good.substr(0, cut), "truncated data");
+    expectBtRejected(good.substr(0, cut), "truncated data");
   }
-  expectRejected(good + "\n", "trailing bytes");
+  expectBtRejected(good + "\n", "trailing bytes");
   std::string wrong_size = good;
   wrong_size.replace(wrong_size.find("size ") + 5, 1, "9");
-  expectRejected(wrong_size, "nodes but the header says size");
+  expectBtRejected(wrong_size, "nodes but the header says size");
   // A chain of inner nodes (child 0 only) one level too deep.
   std::string deep = header("id OcTree\nsize 17\nres 0.1\ndata\n");
   for (int depth = 0; depth < 16; ++depth) deep += std::string("\x03\x00", 2);
-  expectRejected(deep, "depth 16");
+  expectBtRejected(deep, "depth 16");
 }
 
 TEST(OctomapBt, RejectsTruncatedGeb079) {

@@ -13,7 +13,7 @@
 namespace rmap::map3d {
 namespace {
 
-using LeafTuple = std::tuple<int32_t, int32_t, int32_t, int32_t, float>;
+using OtLeafTuple = std::tuple<int32_t, int32_t, int32_t, int32_t, float>;
 
 /// A small scene: a few scans into an OctoMap tree of type Tree, pruned.
 template <typename Tree>
@@ -30,8 +30,8 @@ void fillTree(Tree& tree) {
 }
 
 template <typename Tree>
-std::vector<LeafTuple> octomapLeaves(const Tree& tree) {
-  std::vector<LeafTuple> out;
+std::vector<OtLeafTuple> octomapLeaves(const Tree& tree) {
+  std::vector<OtLeafTuple> out;
   for (auto it = tree.begin_leafs(); it != tree.end_leafs(); ++it) {
     const int size = 1 << (16 - it.getDepth());
     const octomap::OcTreeKey k = it.getKey();
@@ -42,8 +42,8 @@ std::vector<LeafTuple> octomapLeaves(const Tree& tree) {
   return out;
 }
 
-std::vector<LeafTuple> parsedLeaves(const OtTree& tree) {
-  std::vector<LeafTuple> out;
+std::vector<OtLeafTuple> parsedLeaves(const OtTree& tree) {
+  std::vector<OtLeafTuple> out;
   for (const OctreeLeaf& l : tree.leaves) {
     out.emplace_back(l.min_cell.x, l.min_cell.y, l.min_cell.z, l.size_cells, l.log_odds);
   }
@@ -66,7 +66,7 @@ TEST(OctomapOt, ParsesAnOcTreeWithItsLogOdds) {
   const OtTree parsed = parseOt(bytes);
   EXPECT_EQ(parsed.id, "OcTree");
   EXPECT_DOUBLE_EQ(parsed.resolution_m, 0.05);
-  const std::vector<LeafTuple> expected = octomapLeaves(tree);
+  const std::vector<OtLeafTuple> expected = octomapLeaves(tree);
   ASSERT_GT(expected.size(), 1000u);
   EXPECT_EQ(parsedLeaves(parsed), expected);
 }
@@ -86,7 +86,7 @@ TEST(OctomapOt, EmptyTree) {
   EXPECT_TRUE(parsed.leaves.empty());
 }
 
-void expectRejected(const std::string& bytes, const std::string& message_part) {
+void expectOtRejected(const std::string& bytes, const std::string& message_part) {
   try {
     parseOt(bytes);
     ADD_FAILURE() << "accepted input; expected an error containing \"" << message_part << "\"";
@@ -101,21 +101,21 @@ TEST(OctomapOt, RejectsBadInput) {
   const std::string good = written(tree);
   const size_t data_at = good.find("data\n") + 5;
   for (size_t cut : {data_at, data_at + 3, (data_at + good.size()) / 2, good.size() - 1}) {
-    expectRejected(good.substr(0, cut), "truncated data");
+    expectOtRejected(good.substr(0, cut), "truncated data");
   }
-  expectRejected(good + "x", "trailing bytes");
+  expectOtRejected(good + "x", "trailing bytes");
   std::string wrong_size = good;
   wrong_size.replace(wrong_size.find("size ") + 5, 1, "9");
-  expectRejected(wrong_size, "nodes but the header says size");
-  expectRejected("# Octomap OcTree binary file\nid OcTree\nsize 0\nres 0.1\ndata\n", "first line");
-  expectRejected("# Octomap OcTree file\nid CountingOcTree\nsize 0\nres 0.1\ndata\n", "unsupported tree id");
-  expectRejected("# Octomap OcTree file\nid OcTree\nsize 0\nres 0\ndata\n", "res must be");
+  expectOtRejected(wrong_size, "nodes but the header says size");
+  expectOtRejected("# Octomap OcTree binary file\nid OcTree\nsize 0\nres 0.1\ndata\n", "first line");
+  expectOtRejected("# Octomap OcTree file\nid CountingOcTree\nsize 0\nres 0.1\ndata\n", "unsupported tree id");
+  expectOtRejected("# Octomap OcTree file\nid OcTree\nsize 0\nres 0\ndata\n", "res must be");
   // A leaf whose value is NaN.
   std::string nan_leaf = "# Octomap OcTree file\nid OcTree\nsize 1\nres 0.1\ndata\n";
   const float nan = std::numeric_limits<float>::quiet_NaN();
   nan_leaf.append(reinterpret_cast<const char*>(&nan), sizeof nan);
   nan_leaf += '\0';
-  expectRejected(nan_leaf, "not finite");
+  expectOtRejected(nan_leaf, "not finite");
   // A chain of nodes (child 0 only) one level too deep.
   std::string deep = "# Octomap OcTree file\nid OcTree\nsize 18\nres 0.1\ndata\n";
   const float zero = 0.0f;
@@ -123,7 +123,7 @@ TEST(OctomapOt, RejectsBadInput) {
     deep.append(reinterpret_cast<const char*>(&zero), sizeof zero);
     deep += '\x01';
   }
-  expectRejected(deep, "depth 16");
+  expectOtRejected(deep, "depth 16");
 }
 
 }  // namespace

@@ -10,10 +10,9 @@ namespace rmap::sim {
 namespace {
 
 using test::at;
-using test::box;
 
 /// A closed room of reflectivity 0.5 whose +x wall is 0.9 on its left half (y > 0).
-VoxelWorld room() {
+VoxelWorld litRoom() {
   VoxelWorld w = test::closedRoom(4.0, 0.5f);
   w.fillBox(box(5, 0, 0, 5.3, 5, 4), 0.9f);
   return w;
@@ -38,14 +37,14 @@ CameraModel fixedExposure() {
 TEST(Camera, RendersReflectivityTimesLight) {
   std::mt19937_64 rng(1);
   const CameraModel m = fixedExposure();
-  const GreyImage img = renderCamera(room(), at(0, 0, 2), m, noiseless(1.0), rng);
+  const GreyImage img = renderCamera(litRoom(), at(0, 0, 2), m, noiseless(1.0), rng);
   ASSERT_EQ(img.width, 64);
   ASSERT_EQ(img.pixels.size(), 64u * 48u);
   // The facing wall's normal is −x, against the light: full light.
   EXPECT_EQ(img.at(16, 24), 230);  // left half (y > 0): 255 · 0.9
   EXPECT_EQ(img.at(48, 24), 128);  // right half: 255 · 0.5, rounded
   // Half the light halves the grey values.
-  const GreyImage dim = renderCamera(room(), at(0, 0, 2), m, noiseless(0.5), rng);
+  const GreyImage dim = renderCamera(litRoom(), at(0, 0, 2), m, noiseless(0.5), rng);
   EXPECT_EQ(dim.at(16, 24), 115);
   // The floor (normal +z, perpendicular to the light) gets the ambient share only.
   EXPECT_EQ(img.at(32, 47), std::lround(255 * 0.5 * 0.4));
@@ -56,8 +55,8 @@ TEST(Camera, AutoExposureEvensOutTheLightLevelUntilTheGainRunsOut) {
   CameraModel m = fixedExposure();
   m.auto_exposure = true;
   m.target_mean_grey = 100.0;
-  const GreyImage day = renderCamera(room(), at(0, 0, 2), m, noiseless(1.0), rng);
-  const GreyImage dusk = renderCamera(room(), at(0, 0, 2), m, noiseless(0.25), rng);
+  const GreyImage day = renderCamera(litRoom(), at(0, 0, 2), m, noiseless(1.0), rng);
+  const GreyImage dusk = renderCamera(litRoom(), at(0, 0, 2), m, noiseless(0.25), rng);
   auto mean = [](const GreyImage& g) {
     double s = 0.0;
     for (uint8_t p : g.pixels) s += p;
@@ -67,8 +66,8 @@ TEST(Camera, AutoExposureEvensOutTheLightLevelUntilTheGainRunsOut) {
   EXPECT_NEAR(mean(dusk), 100.0, 2.0);
   EXPECT_NEAR(dusk.at(16, 24), day.at(16, 24), 1);
   // At 1 % light the gain stops at max_auto_gain (16).
-  const double fixed_day = mean(renderCamera(room(), at(0, 0, 2), fixedExposure(), noiseless(1.0), rng));
-  const GreyImage night = renderCamera(room(), at(0, 0, 2), m, noiseless(0.01), rng);
+  const double fixed_day = mean(renderCamera(litRoom(), at(0, 0, 2), fixedExposure(), noiseless(1.0), rng));
+  const GreyImage night = renderCamera(litRoom(), at(0, 0, 2), m, noiseless(0.01), rng);
   EXPECT_NEAR(mean(night), 0.01 * m.max_auto_gain * fixed_day, 1.0);
 }
 
@@ -77,7 +76,7 @@ TEST(Camera, DarkLeavesOnlyNoise) {
   const CameraModel m = fixedExposure();
   Lighting dark = noiseless(0.0);
   dark.noise_sigma = 3.0;
-  const GreyImage img = renderCamera(room(), at(0, 0, 2), m, dark, rng);
+  const GreyImage img = renderCamera(litRoom(), at(0, 0, 2), m, dark, rng);
   double sum = 0.0;
   for (uint8_t g : img.pixels) sum += g;
   EXPECT_LT(sum / img.pixels.size(), 2.0);  // half the noise clamps at 0: mean ≈ σ/√(2π)
@@ -89,20 +88,20 @@ TEST(Camera, SameSeedSameImage) {
   m.width_px = 32;
   m.height_px = 32;
   std::mt19937_64 a(5), b(5);
-  EXPECT_EQ(renderCamera(room(), at(1, 1, 2, 0.3), m, {}, a).pixels, renderCamera(room(), at(1, 1, 2, 0.3), m, {}, b).pixels);
+  EXPECT_EQ(renderCamera(litRoom(), at(1, 1, 2, 0.3), m, {}, a).pixels, renderCamera(litRoom(), at(1, 1, 2, 0.3), m, {}, b).pixels);
 }
 
 TEST(Camera, BadModelOrLightingThrows) {
   std::mt19937_64 rng(1);
   CameraModel m;
   m.width_px = 2;
-  EXPECT_THROW(renderCamera(room(), at(0, 0, 2), m, {}, rng), std::invalid_argument);
+  EXPECT_THROW(renderCamera(litRoom(), at(0, 0, 2), m, {}, rng), std::invalid_argument);
   Lighting l;
   l.light_level = -1.0;
-  EXPECT_THROW(renderCamera(room(), at(0, 0, 2), {}, l, rng), std::invalid_argument);
+  EXPECT_THROW(renderCamera(litRoom(), at(0, 0, 2), {}, l, rng), std::invalid_argument);
   l = {};
   l.light_direction = Eigen::Vector3d::Zero();
-  EXPECT_THROW(renderCamera(room(), at(0, 0, 2), {}, l, rng), std::invalid_argument);
+  EXPECT_THROW(renderCamera(litRoom(), at(0, 0, 2), {}, l, rng), std::invalid_argument);
 }
 
 }  // namespace

@@ -14,13 +14,12 @@ namespace {
 using Eigen::Vector3d;
 
 using test::at;
-using test::box;
 
 /// Square room [−5, 5]² × [0, 3], walls of reflectivity 0.6.
-VoxelWorld room() { return test::closedRoom(3.0, 0.6f); }
+VoxelWorld laserRoom() { return test::closedRoom(3.0, 0.6f); }
 
 TEST(Laser2d, GeometryAndConventions) {
-  const VoxelWorld w = room();
+  const VoxelWorld w = laserRoom();
   Laser2dModel m = Laser2dModel::hokuyoLike();
   std::mt19937_64 rng(1);
   const Laser2dScan scan = simulateLaser2d(w, at(0.0, 0.0, 1.0), m, rng);
@@ -42,7 +41,7 @@ TEST(Laser2d, GeometryAndConventions) {
 }
 
 TEST(Laser2d, RangeNoiseHasTheConfiguredSigma) {
-  const VoxelWorld w = room();
+  const VoxelWorld w = laserRoom();
   Laser2dModel m = Laser2dModel::sickLike();
   m.range_noise_sigma_m = 0.03;
   std::mt19937_64 rng(2);
@@ -92,7 +91,7 @@ TEST(Laser2d, PresetsDiffer) {
   EXPECT_GT(slant_ratio / near_ratio, 1.3);
 
   // And in simulated scans of the same room from the same pose.
-  const VoxelWorld w = room();
+  const VoxelWorld w = laserRoom();
   std::mt19937_64 rng(4);
   const Laser2dScan a = simulateLaser2d(w, at(-3.0, 0.0, 1.0), sick, rng);
   const Laser2dScan b = simulateLaser2d(w, at(-3.0, 0.0, 1.0), hokuyo, rng);
@@ -105,7 +104,7 @@ TEST(Laser2d, PresetsDiffer) {
 }
 
 TEST(Laser2d, RejectsBadModels) {
-  const VoxelWorld w = room();
+  const VoxelWorld w = laserRoom();
   std::mt19937_64 rng(5);
   Laser2dModel m;
   m.beams = 1;

@@ -14,7 +14,6 @@ namespace {
 using Eigen::Vector3d;
 
 using test::at;
-using test::box;
 
 VoxelWorld closedRoom() { return test::closedRoom(4.0, 0.5f); }
 

@@ -10,12 +10,8 @@ namespace {
 
 using Eigen::Vector3d;
 
-Eigen::AlignedBox3d box(double x0, double y0, double z0, double x1, double y1, double z1) {
-  return {Vector3d(x0, y0, z0), Vector3d(x1, y1, z1)};
-}
-
 /// 6 m × 6 m room (walls 0.1 m, 3 m high) with a floor at z = 0 and an optional platform.
-VoxelWorld room(double platform_height = 0.0) {
+VoxelWorld platformRoom(double platform_height = 0.0) {
   VoxelWorld w = VoxelWorld::covering(box(0, 0, -0.1, 6, 6, 3), 0.05);
   w.fillBox(box(0, 0, -0.1, 6, 6, 0), 0.3f);
   w.fillBox(box(0, 0, 0, 0.1, 6, 3), 0.5f);
@@ -34,7 +30,7 @@ double gap(const Eigen::AlignedBox2d& a, const Eigen::AlignedBox2d& b) {
 }
 
 TEST(Navigable, FloorCellsKeepClearanceFromWallsAndFurniture) {
-  VoxelWorld w = room();
+  VoxelWorld w = platformRoom();
   const Eigen::AlignedBox2d cabinet(Eigen::Vector2d(2.5, 2.5), Eigen::Vector2d(3.5, 3.5));
   w.fillBox(box(2.5, 2.5, 0, 3.5, 3.5, 1.0), 0.7f);
   const NavigableOptions o;
@@ -69,16 +65,16 @@ TEST(Navigable, FloorCellsKeepClearanceFromWallsAndFurniture) {
 }
 
 TEST(Navigable, LowStepsConnectHighStepsSplit) {
-  const NavigableSpace low(room(0.2), NavigableOptions{});
+  const NavigableSpace low(platformRoom(0.2), NavigableOptions{});
   EXPECT_EQ(low.componentCount(), 1u);
-  const NavigableSpace high(room(0.4), NavigableOptions{});
+  const NavigableSpace high(platformRoom(0.4), NavigableOptions{});
   EXPECT_EQ(high.componentCount(), 2u);
   // Components are numbered by decreasing size.
   EXPECT_GE(high.componentSize(0), high.componentSize(1));
 }
 
 TEST(Navigable, KnownFreeSpaceBoundsTheSensor) {
-  VoxelWorld w = room();
+  VoxelWorld w = platformRoom();
   // Only x < 3 m was observed free (around the sensor height).
   Eigen::Vector3i lo, hi;
   ASSERT_TRUE(w.voxelOf(Vector3d(0.1, 0.1, 0.0), lo));
@@ -104,7 +100,7 @@ TEST(Navigable, NothingWithoutFloorOrHeadroom) {
 }
 
 TEST(Navigable, RejectsBadOptions) {
-  const VoxelWorld w = room();
+  const VoxelWorld w = platformRoom();
   NavigableOptions o;
   o.clearance_m = 0.0;
   EXPECT_THROW(NavigableSpace(w, o), std::invalid_argument);

@@ -8,10 +8,6 @@
 
 namespace rmap::sim::test {
 
-inline Eigen::AlignedBox3d box(double x0, double y0, double z0, double x1, double y1, double z1) {
-  return {Eigen::Vector3d(x0, y0, z0), Eigen::Vector3d(x1, y1, z1)};
-}
-
 /// A closed room [−5, 5]² × [0, height_m] inside a 0.3 m shell of one reflectivity.
 inline VoxelWorld closedRoom(double height_m, float reflectivity, double voxel_m = 0.05) {
   VoxelWorld w = VoxelWorld::covering(box(-5.3, -5.3, -0.3, 5.3, 5.3, height_m + 0.3), voxel_m);

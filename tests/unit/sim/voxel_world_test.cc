@@ -15,10 +15,6 @@ using Eigen::Vector3i;
 // Voxels of 1/8 m make every face and centre exactly representable.
 constexpr double kV = 0.125;
 
-Eigen::AlignedBox3d box(double x0, double y0, double z0, double x1, double y1, double z1) {
-  return {Vector3d(x0, y0, z0), Vector3d(x1, y1, z1)};
-}
-
 /// Grid [−2, 2)³ with a wall x ∈ [1, 1.25).
 VoxelWorld wallWorld() {
   VoxelWorld w(kV, Vector3i::Constant(-16), Vector3i::Constant(32));

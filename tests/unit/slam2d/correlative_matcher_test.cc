@@ -220,7 +220,7 @@ class SimulatedBuilding : public ::testing::Test {
 sim::VoxelWorld* SimulatedBuilding::world_ = nullptr;
 
 /// Endpoints of the finite returns, robot frame (identity mount).
-std::vector<Eigen::Vector2d> endpoints(const LaserScan& scan) {
+std::vector<Eigen::Vector2d> endpointsXy(const LaserScan& scan) {
   std::vector<Eigen::Vector2d> points;
   for (size_t i = 0; i < scan.ranges_m.size(); ++i)
     if (std::isfinite(scan.ranges_m[i]) && scan.ranges_m[i] < scan.range_max_m)
@@ -238,11 +238,11 @@ TEST_F(SimulatedBuilding, RecoversARevisitOverAFullTurn) {
   std::mt19937_64 rng(21);
   std::vector<std::vector<Eigen::Vector2d>> scans;
   std::vector<PosedScan> posed;
-  for (const Pose2& p : tour) scans.push_back(endpoints(testing::simScan(*world_, p, model, rng)));
+  for (const Pose2& p : tour) scans.push_back(endpointsXy(testing::simScan(*world_, p, model, rng)));
   for (size_t i = 0; i < tour.size(); ++i) posed.push_back({tour[i], scans[i]});
   const CorrelativeMatcher matcher(rasterFromScans(posed, 0.05, 0.1f));
   const Pose2 truth = tour[3];
-  const std::vector<Eigen::Vector2d> query = endpoints(testing::simScan(*world_, truth, model, rng));
+  const std::vector<Eigen::Vector2d> query = endpointsXy(testing::simScan(*world_, truth, model, rng));
   ASSERT_GT(query.size(), 300u);
   const Pose2 center = truth * Pose2{1.3, -0.9, 2.4};
   const std::optional<CorrelativeMatch> m = matcher.match(query, center, 2.0, std::numbers::pi, 0.5);

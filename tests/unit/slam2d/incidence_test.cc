@@ -8,10 +8,11 @@
 #include <random>
 #include <stdexcept>
 
+#include "angles.h"
+
 namespace rmap::slam2d {
 namespace {
 
-constexpr double kDeg = std::numbers::pi / 180.0;
 constexpr float kInf = std::numeric_limits<float>::infinity();
 
 /// Beams from −fov/2 to +fov/2 at `step_deg`, ranges filled by the caller.

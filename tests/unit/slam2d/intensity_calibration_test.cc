@@ -7,10 +7,11 @@
 #include <stdexcept>
 #include <string>
 
+#include "angles.h"
+
 namespace rmap::slam2d {
 namespace {
 
-constexpr double kDeg = std::numbers::pi / 180.0;
 
 /// Spline whose coefficients sample f at the Greville abscissae lo + (k − 1)·h:
 /// exact for linear f.

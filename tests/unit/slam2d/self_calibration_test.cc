@@ -8,12 +8,12 @@
 #include <random>
 #include <stdexcept>
 
+#include "angles.h"
 #include "sim/laser2d.h"
 
 namespace rmap::slam2d {
 namespace {
 
-constexpr double kDeg = std::numbers::pi / 180.0;
 
 /// Readings of `cells` surface cells of random reflectivity, each seen from
 /// `views` random viewpoints (range log-uniform in [near_m, far_m], incidence up to 70°).
