@@ -47,8 +47,11 @@ TEST(ReplayRun, UnreachableServerIsAFailureNotAThrow) {
     return ReplayFrame{};
   };
   // Nothing listens on port 1.
-  const ReplayOptions options{.server_url = "ws://127.0.0.1:1", .token = {}, .map = "m", .robot_id = "r",
-                              .timeout = std::chrono::milliseconds(2000)};
+  ReplayOptions options;
+  options.server_url = "ws://127.0.0.1:1";
+  options.map = "m";
+  options.robot_id = "r";
+  options.timeout = std::chrono::milliseconds(2000);
   const ReplaySummary s = runReplay(source, options, nullptr);
   EXPECT_FALSE(s.ok());
   EXPECT_EQ(s.sent, 0u);
