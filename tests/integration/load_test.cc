@@ -45,16 +45,19 @@ constexpr double kScanRate_hz = 4.0;
 constexpr int kReadingViewers = 24;
 constexpr int kStalledViewers = 8;
 constexpr size_t kViewerQueueBytes = 64u << 10;
-#ifdef RMAP_SANITIZE
-// A sanitized rmapd's resident memory also holds ASan's shadow and its 256 MiB quarantine.
-constexpr uint64_t kMemoryBoundBytes = uint64_t{2} << 30;
-#else
-constexpr uint64_t kMemoryBoundBytes = 512u << 20;
-#endif
 /// Generous: only a stall fails them, not a busy machine. The server's own measure (frame
 /// read → ack queued) is the bound it keeps; the robots' adds their threads' waits for a core.
 constexpr double kServerAckP99Bound_s = 2.5;  // a bucket bound of rmap_ack_latency_seconds
+#ifdef RMAP_SANITIZE
+// A sanitized rmapd's resident memory also holds ASan's shadow and its 256 MiB quarantine.
+constexpr uint64_t kMemoryBoundBytes = uint64_t{2} << 30;
+// The sanitized robots and viewers (96 threads on 2 cores in CI) run about 3x slower: there
+// the robots saw p99 5.2 s while the server's own p99 stayed within 2.5 s.
+constexpr double kRobotAckP99Bound_ms = 15000.0;
+#else
+constexpr uint64_t kMemoryBoundBytes = 512u << 20;
 constexpr double kRobotAckP99Bound_ms = 5000.0;
+#endif
 
 std::string columnMap(int robot) { return "load-" + std::to_string(robot % kColumnMaps); }
 /// Column of robot `robot`'s k-th cloud: distinct within its map.
@@ -274,11 +277,14 @@ TEST(Load, SixtyFourRobotsThirtyTwoViewersAndQueriesStayBoundedAndLoseNothing) {
     EXPECT_GT(v.poses, 0u);
   }
   EXPECT_EQ(metricValue(metrics, "rmap_viewer_connections"), double(kReadingViewers + kStalledViewers));
-  EXPECT_GE(metricValue(metrics, "rmap_viewers_skipping"), double(kStalledViewers));
+  // Sampled during the load, not at its end: a stalled peer's socket keeps taking a little more
+  // as the kernel grows its send buffer, so its queue can sink below half and end the skipping
+  // after the robots stopped (seen with the slower sanitized build).
+  EXPECT_GE(sampler.max("rmap_viewers_skipping"), double(kStalledViewers));
   EXPECT_GT(metricValue(metrics, "rmap_viewer_frames_dropped_total"), 0.0);
   EXPECT_LE(sampler.max("rmap_viewer_queue_bytes"), double((kReadingViewers + kStalledViewers) * kViewerQueueBytes));
-  EXPECT_GT(metricValue(metrics, "rmap_viewer_queue_bytes"), double(kStalledViewers * kViewerQueueBytes / 2))
-      << "the stalled viewers' queues are full, not drained";
+  EXPECT_GT(sampler.max("rmap_viewer_queue_bytes"), double(kStalledViewers * kViewerQueueBytes / 2))
+      << "the stalled viewers' queues filled up";
 
   // The queries were all answered meanwhile.
   EXPECT_EQ(query_result.failed, 0u) << query_result.first_errors.front();
