@@ -150,6 +150,17 @@ TEST_F(BrokenStream, HalfAFrameThenADroppedSocketAppliesOnlyTheWholeFrames) {
     for (uint64_t seq = 1; seq <= kWhole; ++seq) {
       ws.write(asio::buffer(cloudWithSeq(seq - 1, seq).SerializeAsString()));
     }
+    // Their acks (logged and applied) are read first: a socket closed with unread bytes is reset,
+    // and a reset drops what the server had not read yet, unacknowledged (a slow server had not
+    // read frames 11 and 12).
+    for (uint64_t seq = 1; seq <= kWhole; ++seq) {
+      buffer.clear();
+      ws.read(buffer);
+      v1::ServerMessage reply;
+      ASSERT_TRUE(reply.ParseFromString(boost::beast::buffers_to_string(buffer.data())));
+      ASSERT_TRUE(reply.has_ack()) << reply.ShortDebugString();
+      EXPECT_EQ(reply.ack().seq(), seq);
+    }
     // Frame 13: its header and half its payload, then the socket goes.
     const std::string payload = cloudWithSeq(kWhole, kWhole + 1).SerializeAsString();
     const std::string frame = maskedFrame(payload);
