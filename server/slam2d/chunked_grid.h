@@ -32,11 +32,19 @@ class ChunkedGrid {
   }
 
   /// Cell at integer indices, allocating its chunk (cells default-constructed).
-  Cell& at(int x, int y) {
+  Cell& at(int x, int y) { return (*chunkAt(x >> kChunkBits, y >> kChunkBits))[offset(x, y)]; }
+
+  /// The chunk of the last cell reached through it: a walk over neighbouring cells (a ray)
+  /// then mostly skips the hash table. Stays valid as chunks are added (they never move).
+  struct Cursor {
+    int cx = 0, cy = 0;
+    Chunk* chunk = nullptr;
+  };
+  /// As at(x, y), through `cursor`.
+  Cell& at(int x, int y, Cursor& cursor) {
     const int cx = x >> kChunkBits, cy = y >> kChunkBits;
-    Chunk* chunk = const_cast<Chunk*>(findChunk(cx, cy));
-    if (!chunk) chunk = insertChunk(cx, cy);
-    return (*chunk)[offset(x, y)];
+    if (!cursor.chunk || cx != cursor.cx || cy != cursor.cy) cursor = {cx, cy, chunkAt(cx, cy)};
+    return (*cursor.chunk)[offset(x, y)];
   }
 
   /// Number of allocated chunks.
@@ -65,6 +73,10 @@ class ChunkedGrid {
     }
   }
 
+  Chunk* chunkAt(int cx, int cy) {
+    Chunk* chunk = const_cast<Chunk*>(findChunk(cx, cy));
+    return chunk ? chunk : insertChunk(cx, cy);
+  }
   Chunk* insertChunk(int cx, int cy) {
     if (2 * (chunks_.size() + 1) > table_.size()) rehash(table_.empty() ? 64 : 2 * table_.size());
     chunks_.push_back(std::make_unique<Chunk>());

@@ -51,23 +51,27 @@ OccupancyGrid::Sample OccupancyGrid::sample(const Eigen::Vector2d& p_m) const {
 }
 
 void OccupancyGrid::apply(Cell& cell, float delta, const OccupancyUpdate& update, int x, int y) {
-  if (std::isnan(cell.log_odds)) {
+  const bool known = !std::isnan(cell.log_odds);
+  if (!known) {
     cell.log_odds = 0.0f;
     known_.extend(Eigen::Vector2i(x, y));
   }
-  cell.log_odds = std::clamp(cell.log_odds + delta, update.min_log_odds, update.max_log_odds);
-  cell.value = 1.0f / (1.0f + std::exp(-cell.log_odds));
+  const float log_odds = std::clamp(cell.log_odds + delta, update.min_log_odds, update.max_log_odds);
+  // A known cell at a clamp bound stays there (most free cells, once mapped): its value holds it.
+  if (known && log_odds == cell.log_odds) return;
+  cell.log_odds = log_odds;
+  cell.value = 1.0f / (1.0f + std::exp(-log_odds));
 }
 
-void OccupancyGrid::miss(int x, int y, const OccupancyUpdate& update) {
-  Cell& cell = cells_.at(x, y);
+void OccupancyGrid::miss(int x, int y, const OccupancyUpdate& update, Cursor& cursor) {
+  Cell& cell = cells_.at(x, y, cursor);
   if ((cell.mark >> 1) == insertion_) return;  // already changed by this scan
   cell.mark = insertion_ << 1;
   apply(cell, update.miss_log_odds, update, x, y);
 }
 
-void OccupancyGrid::hit(int x, int y, const OccupancyUpdate& update) {
-  Cell& cell = cells_.at(x, y);
+void OccupancyGrid::hit(int x, int y, const OccupancyUpdate& update, Cursor& cursor) {
+  Cell& cell = cells_.at(x, y, cursor);
   const uint32_t hit_mark = (insertion_ << 1) | 1u;
   if (cell.mark == hit_mark) return;
   // A beam of this scan crossed the cell before another ended in it: the hit wins.
@@ -81,6 +85,7 @@ void OccupancyGrid::insert(const Eigen::Vector2d& origin_m, std::span<const Ray>
   ++insertion_;  // marks of earlier scans never equal the new ones (wraps after 2^31 scans)
   if (insertion_ >= (1u << 31)) insertion_ = 1;
   const double ox = origin_m.x() * inv_resolution_, oy = origin_m.y() * inv_resolution_;
+  Cursor cursor;
   for (const Ray& ray : rays) {
     Eigen::Vector2d end = ray.end_m;
     bool is_hit = ray.hit;
@@ -101,7 +106,7 @@ void OccupancyGrid::insert(const Eigen::Vector2d& origin_m, std::span<const Ray>
     double t_y = dy != 0.0 ? ((dy > 0 ? (y + 1 - oy) : (oy - y)) * t_dy) : INFINITY;
     int steps = std::abs(end_x - x) + std::abs(end_y - y);
     for (; steps > 0; --steps) {
-      miss(x, y, update);
+      miss(x, y, update, cursor);
       if (t_x < t_y) {
         x += step_x;
         t_x += t_dx;
@@ -111,9 +116,9 @@ void OccupancyGrid::insert(const Eigen::Vector2d& origin_m, std::span<const Ray>
       }
     }
     if (is_hit)
-      hit(end_x, end_y, update);
+      hit(end_x, end_y, update, cursor);
     else
-      miss(end_x, end_y, update);
+      miss(end_x, end_y, update, cursor);
   }
 }
 

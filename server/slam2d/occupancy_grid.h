@@ -70,8 +70,9 @@ class OccupancyGrid {
     uint32_t mark = 0;    ///< 2·insertion + (1 if hit) of the last change
   };
 
-  void miss(int x, int y, const OccupancyUpdate& update);
-  void hit(int x, int y, const OccupancyUpdate& update);
+  using Cursor = ChunkedGrid<Cell>::Cursor;
+  void miss(int x, int y, const OccupancyUpdate& update, Cursor& cursor);
+  void hit(int x, int y, const OccupancyUpdate& update, Cursor& cursor);
   void apply(Cell& cell, float delta, const OccupancyUpdate& update, int x, int y);
   float value(int x, int y) const {
     const Cell* c = cells_.find(x, y);

@@ -2,6 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <utility>
+#include <vector>
+
 namespace rmap::slam2d {
 namespace {
 
@@ -33,6 +36,28 @@ TEST(ChunkedGrid, GrowsInEveryDirectionAndKeepsCellsInPlace) {
   EXPECT_EQ(grid.find(far / 2, far / 2), nullptr);
   // -1 and -64 share chunk -1; -65 is in chunk -2.
   EXPECT_NE(grid.find(-33, -33), nullptr);
+}
+
+TEST(ChunkedGrid, ACursorReachesTheSameCellsAsDirectAccessAcrossChunks) {
+  ChunkedGrid<int> grid;
+  ChunkedGrid<int>::Cursor cursor;
+  // A walk through four chunks around the origin and back, and a jump far away and back.
+  std::vector<std::pair<int, int>> walk;
+  for (int k = -70; k <= 70; ++k) walk.emplace_back(k, k / 2);
+  for (int k = 70; k >= -70; k -= 7) walk.emplace_back(k, -k);
+  walk.emplace_back(1 << 20, -(1 << 20));
+  walk.emplace_back(0, 0);
+  int written = 0;
+  for (const auto& [x, y] : walk) grid.at(x, y, cursor) += ++written;
+  ChunkedGrid<int> direct;
+  written = 0;
+  for (const auto& [x, y] : walk) direct.at(x, y) += ++written;
+  EXPECT_EQ(grid.chunkCount(), direct.chunkCount());
+  for (const auto& [x, y] : walk) {
+    ASSERT_NE(grid.find(x, y), nullptr);
+    EXPECT_EQ(*grid.find(x, y), *direct.find(x, y)) << x << ", " << y;
+    EXPECT_EQ(&grid.at(x, y, cursor), grid.find(x, y));
+  }
 }
 
 }  // namespace
