@@ -142,7 +142,9 @@ TEST(LoopClosure, TwoRobotsCrossingOnOneMapCloseALoopAndTheirTrajectoriesAreCorr
       r->client->send(m);
       // The map's frame is that of the first scan in the log: east's, whatever the two
       // connections' timing (west's would put the whole map, east included, 0.64 m off).
-      if (k == 0 && r == &a) ASSERT_TRUE(r->client->waitAllAcked(std::chrono::seconds(30)));
+      if (k == 0 && r == &a) {
+        ASSERT_TRUE(r->client->waitAllAcked(std::chrono::seconds(30)));
+      }
     }
   }
   for (SimRobot* r : {&a, &b}) ASSERT_TRUE(r->client->waitAllAcked(std::chrono::seconds(180)));
