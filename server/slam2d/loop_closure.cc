@@ -35,42 +35,42 @@ void LoopClosureOptions::validate() const {
   requireLoopOption(search_every_keyframes >= 1, "search_every_keyframes must be ≥ 1");
   requireLoopOption(max_candidates >= 1, "max_candidates must be ≥ 1");
   requireLoopOption(nonNegative(window_m) && nonNegative(window_growth_m_per_m) && max_window_m >= window_m &&
-              max_window_m <= 50.0,
-          "need 0 ≤ window_m ≤ max_window_m ≤ 50 and a growth ≥ 0");
+                        max_window_m <= 50.0,
+                    "need 0 ≤ window_m ≤ max_window_m ≤ 50 and a growth ≥ 0");
   requireLoopOption(nonNegative(window_rad) && nonNegative(window_growth_rad_per_m) && max_window_rad >= window_rad &&
-              max_window_rad <= 3.14159,
-          "need 0 ≤ window_rad ≤ max_window_rad ≤ π and a growth ≥ 0");
+                        max_window_rad <= 3.14159,
+                    "need 0 ≤ window_rad ≤ max_window_rad ≤ π and a growth ≥ 0");
   requireLoopOption(nonNegative(candidate_distance_m), "candidate_distance_m must be ≥ 0");
   requireLoopOption(min_score > 0.0 && min_score <= 1.0, "min_score must be in (0, 1]");
   requireLoopOption(sparse_min_score > 0.0 && sparse_min_score <= 1.0, "sparse_min_score must be in (0, 1]");
   requireLoopOption(nonNegative(sparse_keyframe_spacing_m), "sparse_keyframe_spacing_m must be ≥ 0");
   requireLoopOption(sparse_raster_dilation_cells >= 0 && sparse_raster_dilation_cells <= 10 && submap.raster_dilation_cells >= 0 &&
-              submap.raster_dilation_cells <= 10,
-          "raster dilation must be in [0, 10] cells");
+                        submap.raster_dilation_cells <= 10,
+                    "raster dilation must be in [0, 10] cells");
   requireLoopOption(nonNegative(small_correction_m) && nonNegative(small_correction_rad), "small_correction_* must be ≥ 0");
   requireLoopOption(support_keyframes >= 0, "support_keyframes must be ≥ 0");
   requireLoopOption(nonNegative(support_tolerance_m) && nonNegative(support_tolerance_rad), "support_tolerance_* must be ≥ 0");
   requireLoopOption(optimize_every_keyframes >= 1, "optimize_every_keyframes must be ≥ 1");
   requireLoopOption(positive(sequential_sigma_m) && positive(sequential_sigma_rad) && positive(loop_sigma_m) &&
-              positive(loop_sigma_rad) && nonNegative(sequential_sigma_m_per_m) &&
-              nonNegative(sequential_sigma_rad_per_m),
-          "edge standard deviations must be finite and > 0 (their growth ≥ 0)");
+                        positive(loop_sigma_rad) && nonNegative(sequential_sigma_m_per_m) &&
+                        nonNegative(sequential_sigma_rad_per_m),
+                    "edge standard deviations must be finite and > 0 (their growth ≥ 0)");
   requireLoopOption(std::isfinite(ambiguous_sigma_along_m) && ambiguous_sigma_along_m >= loop_sigma_m,
-          "ambiguous_sigma_along_m must be finite and ≥ loop_sigma_m");
+                    "ambiguous_sigma_along_m must be finite and ≥ loop_sigma_m");
   requireLoopOption(positive(max_loop_error_m) && positive(max_loop_error_rad), "max_loop_error_* must be > 0");
   requireLoopOption(cached_submaps >= 1, "cached_submaps must be ≥ 1");
   requireLoopOption(nonNegative(match_point_spacing_m), "match_point_spacing_m must be ≥ 0");
   requireLoopOption(nonNegative(rerender_shift_m) && nonNegative(rerender_shift_rad), "rerender_shift_* must be ≥ 0");
   requireLoopOption(submap.levels >= 1 && submap.levels <= 8, "submap.levels must be in [1, 8]");
   requireLoopOption(submap.unknown_probability >= 0.0f && submap.unknown_probability <= 1.0f,
-          "submap.unknown_probability must be in [0, 1]");
+                    "submap.unknown_probability must be in [0, 1]");
   requireLoopOption(nonNegative(submap.max_refinement_shift_m) && nonNegative(submap.max_refinement_shift_rad),
-          "submap.max_refinement_shift_* must be ≥ 0");
+                    "submap.max_refinement_shift_* must be ≥ 0");
   requireLoopOption(nonNegative(submap.ambiguity_radius_m) && nonNegative(submap.ambiguity_window_m) &&
-              submap.ambiguity_window_m <= 50.0 &&
-              submap.ambiguity_window_rad >= 0.0 && submap.ambiguity_window_rad <= 3.14159 &&
-              std::isfinite(submap.ambiguity_margin),
-          "submap.ambiguity_*: radius ≥ 0, window in [0, 50] m, window_rad in [0, π], a finite margin");
+                        submap.ambiguity_window_m <= 50.0 &&
+                        submap.ambiguity_window_rad >= 0.0 && submap.ambiguity_window_rad <= 3.14159 &&
+                        std::isfinite(submap.ambiguity_margin),
+                    "submap.ambiguity_*: radius ≥ 0, window in [0, 50] m, window_rad in [0, π], a finite margin");
   submap.correlative.validate();
   graph.validate();
 }
