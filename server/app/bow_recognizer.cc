@@ -15,7 +15,11 @@ RecognizerFactory bowRecognizers(const LoopClosureConfig& config) {
     const bool on = kind == FrameKind::kCamera              ? config.camera
                     : kind == FrameKind::kIntensityPanorama ? config.cloud_intensity
                                                             : config.reflectivity_patches;
-    return on ? std::make_unique<BowRecognizer>() : nullptr;
+    if (!on) return nullptr;
+    loop::LoopDetectorOptions options;
+    // A reflectivity patch is a metric top-down picture: a revisit is the same picture turned and shifted.
+    if (kind == FrameKind::kReflectivityPatch) options.verification.model = loop::GeometricModel::kRigid2d;
+    return std::make_unique<BowRecognizer>(std::move(options));
   };
 }
 

@@ -1,5 +1,6 @@
 #include "loop/geometric_verification.h"
 
+#include <cmath>
 #include <opencv2/calib3d.hpp>
 #include <stdexcept>
 #include <string>
@@ -18,6 +19,7 @@ void GeometricVerificationOptions::validate() const {
   require(ransac_confidence > 0.0 && ransac_confidence < 1.0, "ransac_confidence must be in (0, 1)");
   require(ransac_iterations >= 1, "ransac_iterations must be >= 1");
   require(min_matches >= 8, "min_matches must be >= 8 (the 8-point fundamental matrix)");
+  require(max_scale_error > 0.0 && max_scale_error < 1.0, "max_scale_error must be in (0, 1)");
 }
 
 
@@ -41,9 +43,19 @@ Verification verifyGeometry(const std::vector<cv::Point2f>& query_points, const 
   v.matches = static_cast<int>(q.size());
   if (v.matches < options.min_matches) return v;
   std::vector<uchar> mask;
-  const cv::Mat f = cv::findFundamentalMat(q, r, cv::FM_RANSAC, options.ransac_threshold_px,
-                                           options.ransac_confidence, options.ransac_iterations, mask);
-  if (f.empty()) return v;
+  if (options.model == GeometricModel::kRigid2d) {
+    const cv::Mat m = cv::estimateAffinePartial2D(q, r, mask, cv::RANSAC, options.ransac_threshold_px,
+                                                  static_cast<size_t>(options.ransac_iterations),
+                                                  options.ransac_confidence);
+    if (m.empty()) return v;
+    // [s·cos, −s·sin, tx; s·sin, s·cos, ty]
+    const double scale = std::hypot(m.at<double>(0, 0), m.at<double>(1, 0));
+    if (std::abs(scale - 1.0) > options.max_scale_error) return v;
+  } else {
+    const cv::Mat f = cv::findFundamentalMat(q, r, cv::FM_RANSAC, options.ransac_threshold_px,
+                                             options.ransac_confidence, options.ransac_iterations, mask);
+    if (f.empty()) return v;
+  }
   for (uchar m : mask) v.inliers += m ? 1 : 0;
   return v;
 }

@@ -164,10 +164,27 @@ TEST(LoopClosure, TwoRobotsCrossingOnOneMapCloseALoopAndTheirTrajectoriesAreCorr
     std::this_thread::sleep_for(std::chrono::milliseconds(200));
   }
   std::map<std::string, int> by_source, far_apart;  // far apart: the two places > 8 m from each other
+  // A false place recognition: the two places truly more than half a reflectivity patch (8 m
+  // wide) apart. (A geometric closure relates a scan to a submap's anchor, which may lie farther.)
+  int judged = 0, wrong = 0;
+  const auto truthOf = [&](const nlohmann::json& end) -> std::optional<Eigen::Vector3d> {
+    const SimRobot& r = end["robot_id"] == a.id ? a : b;
+    const auto t = r.truth.find(end["stamp_ns"].get<int64_t>());
+    return t == r.truth.end() ? std::nullopt : std::optional(t->second);
+  };
   const nlohmann::json* cross = nullptr;
   for (const nlohmann::json& c : closures) {
     const std::string source = c["source"];
     ++by_source[source];
+    const auto q = truthOf(c["query"]), m = truthOf(c["match"]);
+    if (source == "laser_intensity" && q && m) {
+      ++judged;
+      const double apart_m = (*q - *m).head<2>().norm();
+      if (apart_m > 4.0) {
+        ++wrong;
+        std::printf("[ false place recognition ] %.1f m apart: %s\n", apart_m, c.dump().c_str());
+      }
+    }
     EXPECT_TRUE(source == "camera" || source == "laser_intensity" || source == "geometry") << c;
     EXPECT_EQ(c["map"], "shared");
     if (c["query"]["position"].is_array() && c["match"]["position"].is_array()) {
@@ -177,10 +194,12 @@ TEST(LoopClosure, TwoRobotsCrossingOnOneMapCloseALoopAndTheirTrajectoriesAreCorr
     }
     if (!cross && isCross(c)) cross = &c;
   }
-  std::printf("[ closures ] %zu: geometry %d (%d far apart), laser_intensity %d (%d far apart)\n", closures.size(),
-              by_source["geometry"], far_apart["geometry"], by_source["laser_intensity"],
-              far_apart["laser_intensity"]);
+  std::printf("[ closures ] %zu: geometry %d (%d far apart), laser_intensity %d (%d far apart; %d judged by the "
+              "truth, %d false)\n",
+              closures.size(), by_source["geometry"], far_apart["geometry"], by_source["laser_intensity"],
+              far_apart["laser_intensity"], judged, wrong);
   EXPECT_EQ(far_apart["geometry"], 0);
+  EXPECT_EQ(wrong, 0);
   ASSERT_NE(cross, nullptr) << closures.dump();
   const nlohmann::json& c = *cross;
   for (const char* end : {"query", "match"}) {

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <opencv2/imgproc.hpp>
+
 #include "loop/binary_features.h"
 #include "loop/descriptor_matching.h"
 #include "test_images.h"
@@ -27,6 +29,37 @@ TEST(GeometricVerification, SameSceneHasManyInliersAndAnotherSceneFew) {
   EXPECT_GT(same.inliers, 100);
   EXPECT_LE(same.inliers, same.matches);
   EXPECT_LT(different.inliers, 12);
+}
+
+/// `img` turned by `angle_deg` about its centre and scaled by `scale` (same size, black outside).
+cv::Mat turned(const cv::Mat& img, double angle_deg, double scale) {
+  cv::Mat out;
+  const cv::Mat m = cv::getRotationMatrix2D(cv::Point2f(img.cols / 2.0f, img.rows / 2.0f), angle_deg, scale);
+  cv::warpAffine(img, out, m, img.size());
+  return out;
+}
+
+TEST(GeometricVerification, ARigidFitTakesATurnedPictureButNotARescaledOne) {
+  auto ex = makeExtractor();
+  const cv::Mat scene = test::texturedScene(11);
+  const Features a = ex->extract(scene);
+  const Features turned_view = ex->extract(turned(test::shifted(scene, 6.0, -3.0), 25.0, 1.0));
+  const Features zoomed_view = ex->extract(turned(scene, 0.0, 1.3));
+  GeometricVerificationOptions rigid;
+  rigid.model = GeometricModel::kRigid2d;
+  const Verification same = verifyGeometry(points(a), a.descriptors, points(turned_view), turned_view.descriptors, rigid);
+  EXPECT_GT(same.inliers, 50);
+  // A zoom fits a fundamental matrix (it sees one plane) but is no rigid motion.
+  const GeometricVerificationOptions fundamental;
+  EXPECT_GT(verifyGeometry(points(a), a.descriptors, points(zoomed_view), zoomed_view.descriptors, fundamental).inliers,
+            20);
+  const Verification zoomed =
+      verifyGeometry(points(a), a.descriptors, points(zoomed_view), zoomed_view.descriptors, rigid);
+  EXPECT_GE(zoomed.matches, 15);
+  EXPECT_EQ(zoomed.inliers, 0);
+  GeometricVerificationOptions bad = rigid;
+  bad.max_scale_error = 1.0;
+  EXPECT_THROW(bad.validate(), std::invalid_argument);
 }
 
 TEST(GeometricVerification, TooFewMatchesGiveNoInliersAndBadInputThrows) {
