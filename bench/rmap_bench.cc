@@ -107,6 +107,7 @@ int main(int argc, char** argv) {
   d->add_option("--match-point-spacing", slam2d.slam.match_point_spacing_m, "spacing of the matched endpoints, metres");
   d->add_option("--coarse-iterations", slam2d.slam.matcher.coarse_iterations, "Gauss-Newton iterations per coarse level");
   d->add_option("--fine-iterations", slam2d.slam.matcher.fine_iterations, "Gauss-Newton iterations on the finest level");
+  d->add_option("--matcher-damping", slam2d.slam.matcher.damping, "Levenberg damping of the scan matcher, relative to the Hessian trace");
   d->add_option("--relock-margin", slam2d.slam.relock_residual_margin, "match residual above the recent mean that triggers a search (<= 0: off)");
   std::string loop_closure = "off";  // off by default: the front-end figures stay comparable
   d->add_option("--loop-closure", loop_closure, "loop closure with a pose graph (scored: the corrected trajectory)")

@@ -54,7 +54,7 @@ Slam2dDataset fromLog(const std::string& path, OdometrySource odometry) {
     throw std::runtime_error(path + ": its ODOM lines restart at every scan pose, so the logged poses are corrected "
                              "(the reference), not odometry; use odom-increments or none");
   }
-  std::vector<Pose2> increments;
+  std::vector<std::optional<Pose2>> increments;
   if (odometry == OdometrySource::kOdomIncrements) increments = datasets::odometryFromOdomIncrements(log);
   data.odometry_kind = odometry == OdometrySource::kOdomIncrements ? "increments of the ODOM lines"
                        : odometry == OdometrySource::kLogged       ? "logged robot poses (raw odometry)"

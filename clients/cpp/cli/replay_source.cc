@@ -157,8 +157,7 @@ ReplaySource carmenSource(const std::vector<std::string>& paths, const ReplaySou
   // the wheel increments of its ODOM lines, a raw log its logged robot poses, a log without ODOM none.
   auto odometry = std::make_shared<std::vector<std::optional<slam2d::Pose2>>>(log->scans.size());
   if (datasets::odometryRestartsAtScans(*log)) {
-    const std::vector<slam2d::Pose2> increments = datasets::odometryFromOdomIncrements(*log);
-    for (size_t k = 0; k < increments.size(); ++k) (*odometry)[k] = increments[k];
+    *odometry = datasets::odometryFromOdomIncrements(*log);
     source.notes.push_back("odometry: the increments of the ODOM lines (a corrected log)");
   } else if (!log->odometry.empty()) {
     for (size_t k = 0; k < log->scans.size(); ++k) (*odometry)[k] = log->scans[k].robot_pose;

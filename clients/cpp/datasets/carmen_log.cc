@@ -233,19 +233,22 @@ bool odometryRestartsAtScans(const CarmenLog& log) {
   return followed > 0 && restarted >= 0.9 * double(followed);
 }
 
-std::vector<Pose2> odometryFromOdomIncrements(const CarmenLog& log) {
-  std::vector<Pose2> odometry;
+std::vector<std::optional<Pose2>> odometryFromOdomIncrements(const CarmenLog& log) {
+  std::vector<std::optional<Pose2>> odometry;
   odometry.reserve(log.scans.size());
   if (log.scans.empty()) return odometry;
-  odometry.push_back({});
+  Pose2 accumulated;
+  odometry.push_back(accumulated);
   for (size_t k = 0; k + 1 < log.scans.size(); ++k) {
     const CarmenScan& now = log.scans[k];
     const CarmenScan& next = log.scans[k + 1];
-    Pose2 increment;
-    if (next.odometry_before > now.odometry_before) {
-      increment = slam2d::between(now.robot_pose, log.odometry[next.odometry_before - 1].pose);
+    // The first ODOM after a scan restarts at its pose; only later ones hold wheel motion.
+    if (next.odometry_before < now.odometry_before + 2) {
+      odometry.push_back(std::nullopt);
+      continue;
     }
-    odometry.push_back(odometry.back() * increment);
+    accumulated = accumulated * slam2d::between(now.robot_pose, log.odometry[next.odometry_before - 1].pose);
+    odometry.push_back(accumulated);
   }
   return odometry;
 }

@@ -36,6 +36,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <map>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -109,9 +110,11 @@ bool odometryRestartsAtScans(const CarmenLog& log);
 /// origin at the first scan, for a log whose ODOM lines restart at each
 /// scan's (corrected) pose: the increment from scan k to scan k + 1 is
 /// robot_pose_k⁻¹ · (last ODOM before scan k + 1), which holds only the
-/// wheel motion and none of the correction; zero when no ODOM lies between
-/// the two scans. The increment stops at that last ODOM, so it misses the
-/// motion until scan k + 1 itself (at most one odometry period).
-std::vector<slam2d::Pose2> odometryFromOdomIncrements(const CarmenLog& log);
+/// wheel motion and none of the correction. The increment stops at that last
+/// ODOM, so it misses the motion until scan k + 1 itself (at most one
+/// odometry period). Scan k + 1 gets none (std::nullopt) when no ODOM
+/// follows scan k's restart before it: its motion is unknown, not zero
+/// (orebro's log restarts after every scan and logs nothing else).
+std::vector<std::optional<slam2d::Pose2>> odometryFromOdomIncrements(const CarmenLog& log);
 
 }  // namespace rmap::datasets
