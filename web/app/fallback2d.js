@@ -195,12 +195,15 @@ export class Renderer2D {
       }
     }
     for (const lc of this.loops) {
-      ctx.strokeStyle = loopColor(lc.source);
+      ctx.strokeStyle = ctx.fillStyle = loopColor(lc.source);
       ctx.lineWidth = lc.fresh ? 2 : 1;
       ctx.beginPath();
       ctx.moveTo(this.sx(lc.a[0]), this.sy(lc.a[1]));
       ctx.lineTo(this.sx(lc.b[0]), this.sy(lc.b[1]));
       ctx.stroke();
+      // A dot at each pose: the two poses of a recognised place may be centimetres apart.
+      const r = lc.fresh ? 3.5 : 2.5;
+      for (const p of [lc.a, lc.b]) ctx.fillRect(this.sx(p[0]) - r, this.sy(p[1]) - r, 2 * r, 2 * r);
     }
     for (const [box, color] of [[this.highlight, '#ffffff'], [this.selection, '#7fd1ff']]) {
       if (!box) continue;

@@ -572,7 +572,9 @@ export class Renderer3D {
 
   /**
    * Loop closures: [{a:[x,y,z], b:[x,y,z], source, fresh:boolean}], a line between the two poses
-   * in its source's colour (colors.js), fresh ones drawn on top.
+   * in its source's colour (colors.js), fresh ones drawn on top, and a dot of a fixed pixel size
+   * at each pose: a place recognised where the map already puts it has its two poses a few
+   * centimetres apart, and the line alone would not show.
    */
   setLoopClosures(list) {
     for (const child of [...this.loopGroup.children]) {
@@ -598,6 +600,11 @@ export class Renderer3D {
       lines.renderOrder = fresh === '1' ? 7 : 6;
       lines.frustumCulled = false;
       this.loopGroup.add(lines);
+      const ends = new THREE.Points(g.clone(), new THREE.PointsMaterial({ color: new THREE.Color(color),
+        size: fresh === '1' ? 7 : 5, sizeAttenuation: false, depthTest: false }));
+      ends.renderOrder = lines.renderOrder;
+      ends.frustumCulled = false;
+      this.loopGroup.add(ends);
     }
     this.requestRender('data');
   }
@@ -606,6 +613,7 @@ export class Renderer3D {
   loopLineCounts() {
     const out = {};
     for (const child of this.loopGroup.children) {
+      if (!child.isLineSegments) continue;
       const key = `#${child.material.color.getHexString()}`;
       out[key] = (out[key] || 0) + child.geometry.getAttribute('position').count / 2;
     }
