@@ -579,7 +579,7 @@ export class Renderer3D {
   setLoopClosures(list) {
     for (const child of [...this.loopGroup.children]) {
       this.loopGroup.remove(child);
-      child.geometry.dispose();
+      child.geometry.dispose();  // the dots share their lines' geometry: disposing twice is harmless
       child.material.dispose();
     }
     const groups = new Map();
@@ -600,7 +600,7 @@ export class Renderer3D {
       lines.renderOrder = fresh === '1' ? 7 : 6;
       lines.frustumCulled = false;
       this.loopGroup.add(lines);
-      const ends = new THREE.Points(g.clone(), new THREE.PointsMaterial({ color: new THREE.Color(color),
+      const ends = new THREE.Points(g, new THREE.PointsMaterial({ color: new THREE.Color(color),
         size: fresh === '1' ? 7 : 5, sizeAttenuation: false, depthTest: false }));
       ends.renderOrder = lines.renderOrder;
       ends.frustumCulled = false;
