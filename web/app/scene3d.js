@@ -14,6 +14,13 @@ import { TILE_CELLS } from './tiles.js';
 const BACKGROUND = 0x12161c;
 const FRAME_SAMPLES = 2048;
 const STEP_CHUNKS = 2; // instance chunks drawn per animation frame by the progressive renderer
+// After a progressive frame of N animation frames, map updates wait N * REST_FRAMES idle
+// animation frames, so a live map does not keep a software rasteriser drawing all the time.
+// Counted in frames, not ms: under headless virtual time performance.now() stands still while
+// the page draws. Without the rest, chromium --headless --virtual-time-budget --screenshot of a
+// live map never returned: its budget took longer in real time than in virtual time, and the
+// capture then waits for a frame that paused virtual time never lets come (docs/BENCHMARKS.md §10).
+const REST_FRAMES = 3;
 
 function gpuName(gl) {
   try {
@@ -53,7 +60,8 @@ export class Renderer3D {
     this.controls.screenSpacePanning = false; // pan in the ground plane
     this.controls.maxPolarAngle = Math.PI * 0.495;
     this.controls.autoRotateSpeed = 1.5;
-    this.controls.addEventListener('change', () => this.viewChanged());
+    // Camera moves the viewer makes itself (following a growing map) redraw like map updates.
+    this.controls.addEventListener('change', () => this.viewChanged(this.automaticView ? 'data' : 'view'));
     this.interacting = false;
     this.controls.addEventListener('start', () => { this.userMoved = true; this.interacting = true; });
     this.controls.addEventListener('end', () => { this.interacting = false; });
@@ -146,6 +154,9 @@ export class Renderer3D {
     this.dataIntervalMs = this.software ? 1000 : 100;
     this.progressive = this.software;
     this.pass = null;
+    this.automaticView = false; // set while fitBounds moves the camera
+    this.lastPassSteps = 0; // animation frames the last progressive frame took
+    this.idleFrames = 0; // animation frames since then without drawing
     this.frameTimes = new Float32Array(FRAME_SAMPLES); // whole frames (all passes' steps), ms
     this.frameCount = 0;
     this.lastFrameDone = 0;
@@ -185,11 +196,11 @@ export class Renderer3D {
     if (this.frames > 0) this.renderNow(); // the new drawing buffer is empty: start filling it at once
   }
 
-  viewChanged() {
+  viewChanged(kind = 'view') {
     this.camera.updateMatrixWorld();
     this.projScreen.multiplyMatrices(this.camera.projectionMatrix, this.camera.matrixWorldInverse);
     this.frustum.setFromProjectionMatrix(this.projScreen);
-    this.requestRender();
+    this.requestRender(kind);
     if (this.onViewChange) this.onViewChange();
   }
 
@@ -219,7 +230,9 @@ export class Renderer3D {
     this.renderTimes[this.frameCursor % FRAME_SAMPLES] = 0;
     // Rotation moves on once the previous (possibly progressive) frame is complete.
     if (this.controls.autoRotate && this.pass === null) this.controls.update(); // emits 'change' → dirty
-    const due = this.dirty && (this.viewDirty || performance.now() - this.lastRender >= this.dataIntervalMs);
+    const rested = this.idleFrames >= REST_FRAMES * this.lastPassSteps;
+    const due = this.dirty && (this.viewDirty || (rested && performance.now() - this.lastRender >= this.dataIntervalMs));
+    if (this.pass === null && !due) this.idleFrames++;
     if (!this.progressive) {
       if (due) this.renderNow();
     } else if (this.pass === null) {
@@ -304,6 +317,8 @@ export class Renderer3D {
     this.renderTimes[this.frameCursor % FRAME_SAMPLES] = performance.now() - t0;
     if (pass.step >= steps) {
       this.pass = null;
+      this.lastPassSteps = steps;
+      this.idleFrames = 0;
       this.lastRender = t0;
       this.frameDone(pass.started);
     }
@@ -380,12 +395,12 @@ export class Renderer3D {
     this.requestRender('data');
   }
 
-  rebuild() {
+  rebuild(kind = 'view') {
     this.occupied.clear();
     this.free.clear();
     for (const [key, tile] of this.tiles) this.writeTile(key, tile);
     this.free.visible = this.showFree;
-    this.requestRender();
+    this.requestRender(kind);
   }
 
   setColorMode(mode) {
@@ -406,7 +421,7 @@ export class Renderer3D {
     if (Math.abs(lo - this.zLo) < 0.1 * span && Math.abs(hi - this.zHi) < 0.1 * span) return;
     this.zLo = lo;
     this.zHi = hi;
-    if (this.colorMode === 'height') this.rebuild();
+    if (this.colorMode === 'height') this.rebuild('data'); // follows the map, not the user
   }
 
   /** Hides cuboids whose bottom is above z (m); Infinity shows all. */
@@ -429,8 +444,9 @@ export class Renderer3D {
     if (same && !force) return;
     this.lastFit = [min.slice(), max.slice()];
     this.lastFitAspect = this.camera.aspect;
+    const kind = force ? 'view' : 'data';
     if (this.userMoved && !force) {
-      this.sizeGrid(min, max);
+      this.sizeGrid(min, max, kind);
       return;
     }
     const cx = (min[0] + max[0]) / 2;
@@ -445,12 +461,14 @@ export class Renderer3D {
     this.camera.near = Math.max(0.01, dist / 2000);
     this.camera.far = dist * 50;
     this.camera.updateProjectionMatrix();
+    this.automaticView = !force;
     this.controls.update();
-    this.sizeGrid(min, max);
-    this.viewChanged();
+    this.automaticView = false;
+    this.sizeGrid(min, max, kind);
+    this.viewChanged(kind);
   }
 
-  sizeGrid(min, max) {
+  sizeGrid(min, max, kind = 'view') {
     const extent = Math.max(max[0] - min[0], max[1] - min[1], 4);
     const step = extent > 200 ? 10 : extent > 40 ? 5 : 1;
     const size = Math.ceil((extent * 1.4) / step) * step;
@@ -469,7 +487,7 @@ export class Renderer3D {
     this.grid.position.set(Math.round((min[0] + max[0]) / 2), Math.round((min[1] + max[1]) / 2), min[2] - 0.01);
     this.scene.add(this.grid);
     this.groundZ = min[2];
-    this.requestRender();
+    this.requestRender(kind);
   }
 
   // ----- robots, trajectories, loop closures -----

@@ -9,7 +9,7 @@
  * @returns {Promise<{png: Buffer|null, loadMs: number, budgetRealMs: number|null, screenshotMs: number|null,
  *   stalledMs?: number, error?: string}>}
  */
-export async function virtualTimeScreenshot(page, url, { budgetMs = 15000, timeoutMs = 120000, stallMs = 20000 } = {}) {
+export async function virtualTimeScreenshot(page, url, { budgetMs = 15000, timeoutMs = 120000, stallMs = 5000 } = {}) {
   const cdp = await page.context().newCDPSession(page);
   const t0 = Date.now();
   const result = { png: null, loadMs: 0, budgetRealMs: null, screenshotMs: null };
