@@ -6,8 +6,10 @@
 
 #include <Eigen/Core>
 #include <nlohmann/json.hpp>
+#include <chrono>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "client/http_client.h"
@@ -65,6 +67,21 @@ inline void streamAll(const std::string& url, const std::string& robot_id, const
   robot.connect();
   for (const v1::RobotMessage& m : messages) robot.send(m);
   ASSERT_TRUE(robot.waitAllAcked(std::chrono::seconds(60)));
+}
+
+/// Waits until the map has fused its blocks after the last message: rmapd fuses a map that
+/// received nothing for 1 s, which changes its cuboids (not their occupancy) and its `cuboids`
+/// count. Tests that compare cuboids read at different moments wait for this first.
+inline void waitForIdleFusion(client::HttpClient& http, const std::string& map) {
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  uint64_t before = getJson(http, "/v1/maps/" + map)["cuboids"].get<uint64_t>();
+  while (std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(1500));
+    const uint64_t now = getJson(http, "/v1/maps/" + map)["cuboids"].get<uint64_t>();
+    if (now == before) return;
+    before = now;
+  }
+  ADD_FAILURE() << "map " << map << " still changing after 60 s";
 }
 
 /// Every cuboid of a map, straight from the box endpoint.

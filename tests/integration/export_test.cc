@@ -70,6 +70,8 @@ class Export : public ::testing::Test {
     }
     const v1::SensorDescription sensor = walker.sensor();
     streamAll(rmapd_->wsUrl(), "walker", "floor", scans, &sensor);
+    client::HttpClient http(rmapd_->httpUrl());
+    waitForIdleFusion(http, "lab");
   }
   static void TearDownTestSuite() {
     delete rmapd_;

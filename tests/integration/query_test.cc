@@ -19,6 +19,8 @@ class Query : public ::testing::Test {
     dir_ = new TempDir("rmap-query");
     rmapd_ = new RmapdProcess(dir_->path() / "data");
     streamAll(rmapd_->wsUrl(), "lidar", "lab", sceneClouds(client::makeSimScene(6), 3, 8));
+    client::HttpClient http(rmapd_->httpUrl());
+    waitForIdleFusion(http, "lab");
   }
   static void TearDownTestSuite() {
     delete rmapd_;
