@@ -70,13 +70,14 @@ inline void streamAll(const std::string& url, const std::string& robot_id, const
 }
 
 /// Waits until the map has fused its blocks after the last message: rmapd fuses a map that
-/// received nothing for 1 s, which changes its cuboids (not their occupancy) and its `cuboids`
-/// count. Tests that compare cuboids read at different moments wait for this first.
+/// received nothing for 1 s (its worker looks every 0.5 s), which changes its cuboids (not their
+/// occupancy) and its `cuboids` count. Tests that compare cuboids read at different moments wait
+/// for this first: the count must hold over 2.5 s, longer than fusion takes to start.
 inline void waitForIdleFusion(client::HttpClient& http, const std::string& map) {
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
   uint64_t before = getJson(http, "/v1/maps/" + map)["cuboids"].get<uint64_t>();
   while (std::chrono::steady_clock::now() < deadline) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(1500));
+    std::this_thread::sleep_for(std::chrono::milliseconds(2500));
     const uint64_t now = getJson(http, "/v1/maps/" + map)["cuboids"].get<uint64_t>();
     if (now == before) return;
     before = now;

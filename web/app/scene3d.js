@@ -19,7 +19,7 @@ const STEP_CHUNKS = 2; // instance chunks drawn per animation frame by the progr
 // Counted in frames, not ms: under headless virtual time performance.now() stands still while
 // the page draws. Without the rest, chromium --headless --virtual-time-budget --screenshot of a
 // live map never returned: its budget took longer in real time than in virtual time, and the
-// capture then waits for a frame that paused virtual time never lets come (docs/BENCHMARKS.md §10).
+// capture then waits for a frame that paused virtual time never lets come (docs/BENCHMARKS.md §3).
 const REST_FRAMES = 3;
 
 function gpuName(gl) {
