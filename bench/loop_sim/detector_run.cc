@@ -31,12 +31,12 @@ double quantileOf(std::vector<double> v, double q) {
   return v[n];
 }
 
-DetectorRun runDetector(const std::function<cv::Mat(size_t)>& frame, size_t n, loop::DescriptorType descriptor,
+DetectorRun runDetector(const std::function<loop::PlaceImage(size_t)>& frame, size_t n, loop::DescriptorType descriptor,
                         const loop::LoopDetectorOptions& options, int max_features) {
   loop::LoopDetector detector(options, loop::makeExtractor(descriptor, max_features));
   DetectorRun run;
   for (size_t i = 0; i < n; ++i) {
-    const cv::Mat image = frame(i);
+    const loop::PlaceImage image = frame(i);
     const double c0 = threadCpuMs();
     const auto t0 = std::chrono::steady_clock::now();
     const loop::FrameResult r = detector.addFrame(image);

@@ -24,7 +24,7 @@ struct DetectorRun {
 };
 
 /// Feeds frames 0..n−1 (from `frame`, not timed) to a detector with `descriptor` features.
-DetectorRun runDetector(const std::function<cv::Mat(size_t)>& frame, size_t n, loop::DescriptorType descriptor,
+DetectorRun runDetector(const std::function<loop::PlaceImage(size_t)>& frame, size_t n, loop::DescriptorType descriptor,
                         const loop::LoopDetectorOptions& options = {}, int max_features = 500);
 
 /// {"recall_at_100_precision", "precision", "recall", "auc"}, each {"tol<k>": value}, and

@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <fstream>
 #include <iostream>
+#include <numbers>
 #include <nlohmann/json.hpp>
 #include <opencv2/features2d.hpp>
 #include <stdexcept>
@@ -11,6 +12,7 @@
 #include "common/machine.h"
 #include "common/lidar_pair.h"
 #include "datasets/ply_cloud.h"
+#include "loop/point_image.h"
 #include "loop_sim/detector_run.h"
 
 namespace rmap::bench {
@@ -53,27 +55,29 @@ json sequenceJson(const SimRevisitSequence& seq) {
           {"truth_max_heading_rad", o.truth.max_heading_rad}};
 }
 
-/// The point under a keypoint: the pixel's own point or the nearest pixel's within `radius` px.
-int liftToPoint(const cv::Mat& index, const cv::Point2f& kp, int radius) {
-  const int u0 = static_cast<int>(kp.x), v0 = static_cast<int>(kp.y);
-  for (int r = 0; r <= radius; ++r) {
-    for (int dv = -r; dv <= r; ++dv) {
-      for (int du = -r; du <= r; ++du) {
-        if (std::max(std::abs(du), std::abs(dv)) != r) continue;
-        const int v = v0 + dv, u = ((u0 + du) % index.cols + index.cols) % index.cols;
-        if (v < 0 || v >= index.rows) continue;
-        if (const int i = index.at<int32_t>(v, u); i >= 0) return i;
-      }
-    }
-  }
-  return -1;
-}
-
 struct RealPairRow {
   std::string projection, descriptor;
   size_t keypoints_source = 0, keypoints_target = 0, matches = 0, agreeing = 0, chance = 0;
   double extract_ms = 0.0, project_ms = 0.0;
+  /// rmapd's verification of the pair (keypoints lifted to their points, 3D rigid RANSAC) and
+  /// its fitted motion against the known one.
+  int rigid3d_matches = 0, rigid3d_inliers = 0;
+  double rigid3d_error_m = 0.0, rigid3d_error_deg = 0.0;
 };
+
+/// The keypoints of `all` that have a point near them, and those points.
+std::pair<loop::Features, std::vector<Eigen::Vector3f>> liftedFeatures(const loop::Features& all,
+                                                                       const cv::Mat& points_m, int radius_px) {
+  std::pair<loop::Features, std::vector<Eigen::Vector3f>> out;
+  for (size_t i = 0; i < all.keypoints.size(); ++i) {
+    const std::optional<Eigen::Vector3f> p = loop::pointNear(points_m, all.keypoints[i].pt, radius_px);
+    if (!p) continue;
+    out.first.keypoints.push_back(all.keypoints[i]);
+    out.first.descriptors.push_back(all.descriptors.row(static_cast<int>(i)));
+    out.second.push_back(*p);
+  }
+  return out;
+}
 
 std::vector<RealPairRow> realPairCheck(const LoopCompareOptions& o) {
   const std::string dir = o.lidar_pair_dir;
@@ -94,11 +98,13 @@ std::vector<RealPairRow> realPairCheck(const LoopCompareOptions& o) {
     po.ring_elevations_rad = rings;
     po.fov_up_rad = rings.back() + half_spacing;
     po.fov_down_rad = rings.front() - half_spacing;
-    cv::Mat images[2], index[2];
+    cv::Mat images[2], points[2];
     double project_ms = 0.0;
     for (int s = 0; s < 2; ++s) {
       const auto t0 = Clock::now();
-      images[s] = loop::projectPanorama(clouds[s].points_m, intensityOf(clouds[s], names[s]), po, index[s]);
+      cv::Mat index;
+      images[s] = loop::projectPanorama(clouds[s].points_m, intensityOf(clouds[s], names[s]), po, index);
+      points[s] = loop::panoramaPoints(index, clouds[s].points_m);
       project_ms += 0.5 * msSince(t0);
     }
     const int radius = std::max(2, po.height_px / static_cast<int>(rings.size()));
@@ -121,16 +127,15 @@ std::vector<RealPairRow> realPairCheck(const LoopCompareOptions& o) {
       }
       std::vector<cv::DMatch> matches;
       cv::BFMatcher(cv::NORM_HAMMING, true).match(f[0].descriptors, f[1].descriptors, matches);
-      std::vector<std::pair<int, int>> lifted;  // (source point, target point) of each match
+      std::vector<std::pair<Eigen::Vector3f, Eigen::Vector3f>> lifted;  // (source point, target point) of each match
       for (const cv::DMatch& m : matches) {
-        const int ps = liftToPoint(index[0], f[0].keypoints[m.queryIdx].pt, radius);
-        const int pt = liftToPoint(index[1], f[1].keypoints[m.trainIdx].pt, radius);
-        if (ps >= 0 && pt >= 0) lifted.emplace_back(ps, pt);
+        const auto ps = loop::pointNear(points[0], f[0].keypoints[m.queryIdx].pt, radius);
+        const auto pt = loop::pointNear(points[1], f[1].keypoints[m.trainIdx].pt, radius);
+        if (ps && pt) lifted.emplace_back(*ps, *pt);
       }
-      auto agree = [&](int ps, int pt) {
-        const Eigen::Vector3d moved =
-            (target_from_source * clouds[0].points_m[ps].cast<double>().homogeneous()).head<3>();
-        return (moved - clouds[1].points_m[pt].cast<double>()).norm() <= o.agree_m;
+      auto agree = [&](const Eigen::Vector3f& ps, const Eigen::Vector3f& pt) {
+        const Eigen::Vector3d moved = (target_from_source * ps.cast<double>().homogeneous()).head<3>();
+        return (moved - pt.cast<double>()).norm() <= o.agree_m;
       };
       row.matches = lifted.size();
       for (size_t k = 0; k < lifted.size(); ++k) {
@@ -138,6 +143,15 @@ std::vector<RealPairRow> realPairCheck(const LoopCompareOptions& o) {
         // Chance level: the same keypoints paired with another match's target.
         row.chance += agree(lifted[k].first, lifted[(k + lifted.size() / 2) % lifted.size()].second);
       }
+      const auto source = liftedFeatures(f[0], points[0], o.detector.point_lift_radius_px);
+      const auto target = liftedFeatures(f[1], points[1], o.detector.point_lift_radius_px);
+      const loop::Verification v = loop::verifyRigid3d(source.second, source.first.descriptors, target.second,
+                                                       target.first.descriptors, o.detector.verification);
+      row.rigid3d_matches = v.matches;
+      row.rigid3d_inliers = v.inliers;
+      const Eigen::Isometry3d error = Eigen::Isometry3d(target_from_source).inverse() * v.reference_from_query;
+      row.rigid3d_error_m = error.translation().norm();
+      row.rigid3d_error_deg = Eigen::AngleAxisd(error.linear()).angle() * 180.0 / std::numbers::pi;
       rows.push_back(row);
     }
   }
@@ -164,27 +178,34 @@ int runLoopSimBench(const LoopSimBenchOptions& options) {
   const loop::PanoramaOptions panorama =
       panoramaFor(options.panorama, projectionFromString(options.projection), so.lidar.rings);
   panorama.validate();
+  loop::LoopDetectorOptions detector = options.detector;
+  // Laser panoramas are verified as rmapd verifies them: in metres, through their points.
+  if (laser && options.verification == "rigid3d") detector.verification.model = loop::GeometricModel::kRigid3d;
 
   double render_ms = 0.0, project_ms = 0.0;
   cv::Size size;
   const auto frame = [&](size_t i) {
     const auto t0 = Clock::now();
-    cv::Mat image;
+    loop::PlaceImage image(cv::Mat{});
     if (laser) {
       const SensorScan scan = seq.lidarScan(i);
       render_ms += msSince(t0);
       const auto t1 = Clock::now();
-      image = loop::projectPanorama(scan.points_sensor, scan.intensities, panorama);
+      cv::Mat index;
+      image.gray = loop::projectPanorama(scan.points_sensor, scan.intensities, panorama, index);
+      if (detector.verification.model == loop::GeometricModel::kRigid3d) {
+        image.points_m = loop::panoramaPoints(index, scan.points_sensor);
+      }
       project_ms += msSince(t1);
     } else {
-      image = seq.cameraImage(i);
+      image.gray = seq.cameraImage(i);
       render_ms += msSince(t0);
     }
-    size = image.size();
+    size = image.gray.size();
     return image;
   };
   const DetectorRun run =
-      runDetector(frame, seq.size(), loop::descriptorTypeFromString(options.descriptor), options.detector);
+      runDetector(frame, seq.size(), loop::descriptorTypeFromString(options.descriptor), detector);
   json score = scoreJson(run, seq.truth(), options.tolerances);
 
   json j = {{"benchmark", "loop-sim"},
@@ -199,6 +220,7 @@ int runLoopSimBench(const LoopSimBenchOptions& options) {
             {"machine", machineJson()}};
   if (laser) {
     j["projection"] = projectionName(panorama.projection);
+    j["verification"] = options.verification;
     j["project_ms_per_frame_mean"] = project_ms / static_cast<double>(seq.size());
   }
   j.update(score);
@@ -273,14 +295,16 @@ int runLoopCompareBench(const LoopCompareOptions& options) {
     json real = json::array();
     std::printf("\nreal lidar pair %s: mutual-nearest matches whose 3D points agree within %.2f m\n\n",
                 options.lidar_pair_dir.c_str(), options.agree_m);
-    std::printf("| projection | descriptor | keypoints (source / target) | matches | agreeing | share | chance share | ms (extract) |\n");
-    std::printf("|---|---|---|---|---|---|---|---|\n");
+    std::printf("| projection | descriptor | keypoints (source / target) | matches | agreeing | share | chance share | "
+                "rigid3d matches / inliers | rigid3d fit error m / ° | ms (extract) |\n");
+    std::printf("|---|---|---|---|---|---|---|---|---|---|\n");
     for (const RealPairRow& r : realPairCheck(options)) {
       const double share = r.matches ? static_cast<double>(r.agreeing) / static_cast<double>(r.matches) : 0.0;
       const double chance = r.matches ? static_cast<double>(r.chance) / static_cast<double>(r.matches) : 0.0;
-      std::printf("| %s | %s | %zu / %zu | %zu | %zu | %.1f %% | %.1f %% | %.1f |\n", r.projection.c_str(),
-                  r.descriptor.c_str(), r.keypoints_source, r.keypoints_target, r.matches, r.agreeing, 100.0 * share,
-                  100.0 * chance, r.extract_ms);
+      std::printf("| %s | %s | %zu / %zu | %zu | %zu | %.1f %% | %.1f %% | %d / %d | %.3f / %.2f | %.1f |\n",
+                  r.projection.c_str(), r.descriptor.c_str(), r.keypoints_source, r.keypoints_target, r.matches,
+                  r.agreeing, 100.0 * share, 100.0 * chance, r.rigid3d_matches, r.rigid3d_inliers, r.rigid3d_error_m,
+                  r.rigid3d_error_deg, r.extract_ms);
       real.push_back({{"projection", r.projection},
                       {"descriptor", r.descriptor},
                       {"keypoints", {r.keypoints_source, r.keypoints_target}},
@@ -288,6 +312,10 @@ int runLoopCompareBench(const LoopCompareOptions& options) {
                       {"agreeing", r.agreeing},
                       {"agreeing_share", share},
                       {"chance_share", chance},
+                      {"rigid3d", {{"matches", r.rigid3d_matches},
+                                   {"inliers", r.rigid3d_inliers},
+                                   {"fit_error_m", r.rigid3d_error_m},
+                                   {"fit_error_deg", r.rigid3d_error_deg}}},
                       {"extract_ms", r.extract_ms},
                       {"project_ms", r.project_ms}});
     }

@@ -13,7 +13,7 @@ class BowRecognizer : public PlaceRecognizer {
  public:
   explicit BowRecognizer(loop::LoopDetectorOptions options = {});
   /// The detector's accepted candidate (score: its acceptance score, the verified inliers).
-  std::optional<Match> addFrame(const cv::Mat& gray) override;
+  std::optional<Match> addFrame(const PlaceImage& image) override;
 
  private:
   loop::LoopDetector detector_;

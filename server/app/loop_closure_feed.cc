@@ -90,8 +90,7 @@ void LoopClosureFeed::process(Frame& frame) {
   const auto start = std::chrono::steady_clock::now();
   std::optional<PlaceRecognizer::Match> match;
   try {
-    const cv::Mat gray = frame.gray();
-    match = source.recognizer->addFrame(gray);
+    match = source.recognizer->addFrame(frame.image());
   } catch (const std::invalid_argument& e) {
     metrics_.loop_frames_refused.fetch_add(1, std::memory_order_relaxed);
     spdlog::warn("map {}: {} frame of {} at {} ns not used for place recognition: {}", map_,

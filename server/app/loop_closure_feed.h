@@ -33,9 +33,9 @@ class LoopClosureFeed {
   struct Frame {
     FrameKind kind = FrameKind::kCamera;
     LoopPlace place;
-    /// Makes the 8-bit grey image on the feed's thread (e.g. decodes a JPEG).
+    /// Makes the image on the feed's thread (e.g. decodes a JPEG, projects a cloud).
     /// @throws std::invalid_argument when it cannot (the frame is skipped and counted)
-    std::function<cv::Mat()> gray;
+    std::function<PlaceImage()> image;
   };
 
   /// @param factory     called once per kind of frame at construction

@@ -315,9 +315,11 @@ void MapWorker::feedCloud(int64_t log_id, const v1::RobotMessage& message, const
                         points[i] = to_sensor * Eigen::Vector3f(copy->xyz_m(3 * i), copy->xyz_m(3 * i + 1),
                                                                 copy->xyz_m(3 * i + 2));
                       }
-                      return loop::projectPanorama(
+                      cv::Mat point_index;
+                      cv::Mat gray = loop::projectPanorama(
                           points, std::span<const float>(copy->intensities().data(), copy->intensities().size()),
-                          loop::PanoramaOptions{});
+                          loop::PanoramaOptions{}, point_index);
+                      return PlaceImage(std::move(gray), loop::panoramaPoints(point_index, points));
                     }},
                    !live);
 }

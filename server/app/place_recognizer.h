@@ -12,6 +12,7 @@
 #include <opencv2/core/mat.hpp>
 
 #include "app/loop_closures.h"
+#include "loop/point_image.h"
 
 namespace rmap::app {
 
@@ -29,6 +30,8 @@ inline LoopSource sourceOf(FrameKind kind) {
   return kind == FrameKind::kCamera ? LoopSource::kCamera : LoopSource::kLaserIntensity;
 }
 
+using loop::PlaceImage;
+
 class PlaceRecognizer {
  public:
   struct Match {
@@ -39,7 +42,7 @@ class PlaceRecognizer {
   /// Adds the next frame (its index is the number of frames added before).
   /// @return the older frame it closes a loop with, when the engine accepts one
   /// @throws std::invalid_argument for an image the engine cannot use (state unchanged)
-  virtual std::optional<Match> addFrame(const cv::Mat& gray) = 0;
+  virtual std::optional<Match> addFrame(const PlaceImage& image) = 0;
 };
 
 /// Makes the recognizer of a kind of frame, or nullptr when that kind is off.

@@ -13,14 +13,21 @@
 ///    RANSAC, and no inlier unless the scale is 1 within max_scale_error. Its
 ///    2 degrees of freedom fewer than the fundamental matrix's 7 leave
 ///    look-alike structure at another scale or with another layout nothing
-///    to fit.
+///    to fit;
+///  - a 3D rigid motion (images whose pixels carry the 3D point they show in
+///    the sensor frame, such as lidar intensity panoramas): keypoints lifted
+///    to metres, a rotation and a shift fitted by RANSAC on 3 matches
+///    (Umeyama, Eigen). Six degrees of freedom in metres: a look-alike place
+///    elsewhere (another storey, a repeated corridor) must also repeat its
+///    3D layout around the sensor, which a fundamental matrix never asks.
 
+#include <Eigen/Geometry>
 #include <opencv2/core.hpp>
 #include <vector>
 
 namespace rmap::loop {
 
-enum class GeometricModel { kFundamental, kRigid2d };
+enum class GeometricModel { kFundamental, kRigid2d, kRigid3d };
 
 struct GeometricVerificationOptions {
   GeometricModel model = GeometricModel::kFundamental;
@@ -28,6 +35,11 @@ struct GeometricVerificationOptions {
   double max_distance_fraction = 0.25;  ///< putative matches within this fraction of the descriptor bits
   double ratio = 0.8;                   ///< nearest / second-nearest distance must be below this
   double ransac_threshold_px = 2.0;     ///< inlier distance (pixels): to the epipolar line, or of the moved point (kRigid2d)
+  /// kRigid3d: a moved query point is an inlier within ransac_threshold_m + ransac_threshold_rad × its
+  /// reference point's range (a keypoint lifted to the point of a pixel a few pixels away lands that
+  /// far off, farther the farther it is).
+  double ransac_threshold_m = 0.2;      ///< metres, > 0
+  double ransac_threshold_rad = 0.03;   ///< rad, ≥ 0
   double ransac_confidence = 0.99;
   int ransac_iterations = 500;
   /// Fewer putative matches: 0 inliers, no fit. Below 15 OpenCV fits by
@@ -42,6 +54,8 @@ struct GeometricVerificationOptions {
 struct Verification {
   int matches = 0;  ///< putative matches
   int inliers = 0;  ///< RANSAC inliers of the model (0 when too few matches, or a rigid fit's scale is off)
+  /// verifyRigid3d with inliers: the fitted motion, reference sensor frame from query sensor frame.
+  Eigen::Isometry3d reference_from_query = Eigen::Isometry3d::Identity();
 };
 
 /// @param query_points, reference_points  keypoint positions (pixels) of each descriptor row
@@ -49,5 +63,12 @@ struct Verification {
 Verification verifyGeometry(const std::vector<cv::Point2f>& query_points, const cv::Mat& query_descriptors,
                             const std::vector<cv::Point2f>& reference_points, const cv::Mat& reference_descriptors,
                             const GeometricVerificationOptions& options);
+
+/// The kRigid3d model (whatever options.model says): keypoints as 3D points.
+/// @param query_points_m, reference_points_m  each descriptor row's point, metres, in its sensor frame (finite)
+/// @throws std::invalid_argument for descriptors not CV_8U of one width, or not one row per point
+Verification verifyRigid3d(const std::vector<Eigen::Vector3f>& query_points_m, const cv::Mat& query_descriptors,
+                           const std::vector<Eigen::Vector3f>& reference_points_m,
+                           const cv::Mat& reference_descriptors, const GeometricVerificationOptions& options);
 
 }  // namespace rmap::loop

@@ -7,6 +7,7 @@
 
 #include "loop/binary_descriptor.h"
 #include "loop/descriptor_matching.h"
+#include "loop/point_image.h"
 
 namespace rmap::loop {
 
@@ -29,6 +30,7 @@ void LoopDetectorOptions::validate() const {
   require(std::isfinite(inlier_floor) && inlier_floor >= 0.0, "inlier_floor must be finite and >= 0");
   require(evidence_decay >= 0.0 && evidence_decay < 1.0, "evidence_decay must be in [0, 1)");
   require(std::isfinite(min_score), "min_score must be finite");
+  require(point_lift_radius_px >= 0, "point_lift_radius_px must be >= 0");
 }
 
 namespace {
@@ -52,11 +54,36 @@ LoopDetector::LoopDetector(LoopDetectorOptions options, std::unique_ptr<FeatureE
       vocabulary_(extractor_->descriptorBytes(), options_.vocabulary) {}
 
 FrameResult LoopDetector::addFrame(const cv::Mat& gray) {
+  if (options_.verification.model == GeometricModel::kRigid3d) {
+    throw std::invalid_argument("LoopDetector: 3D rigid verification needs the image's point image");
+  }
   checkGrayImage(gray, kMinImageSidePx);
   return addFeatures(extractor_->extract(gray));
 }
 
-FrameResult LoopDetector::addFeatures(const Features& features) {
+FrameResult LoopDetector::addFrame(const cv::Mat& gray, const cv::Mat& points_m) {
+  checkGrayImage(gray, kMinImageSidePx);
+  if (!isPointImage(points_m, gray.size())) {
+    throw std::invalid_argument("LoopDetector: the point image must be CV_32FC3 of the image's size");
+  }
+  const Features all = extractor_->extract(gray);
+  Features kept;
+  std::vector<Eigen::Vector3f> points;
+  for (size_t i = 0; i < all.keypoints.size(); ++i) {
+    const std::optional<Eigen::Vector3f> p = pointNear(points_m, all.keypoints[i].pt, options_.point_lift_radius_px);
+    if (!p) continue;
+    kept.keypoints.push_back(all.keypoints[i]);
+    kept.descriptors.push_back(all.descriptors.row(static_cast<int>(i)));
+    points.push_back(*p);
+  }
+  return addFeatures(kept, std::move(points));
+}
+
+FrameResult LoopDetector::addFrame(const PlaceImage& image) {
+  return image.points_m.empty() ? addFrame(image.gray) : addFrame(image.gray, image.points_m);
+}
+
+FrameResult LoopDetector::addFeatures(const Features& features, std::vector<Eigen::Vector3f> points_m) {
   const cv::Mat& d = features.descriptors;
   const auto n = static_cast<int>(features.keypoints.size());
   if (n > 0 && (d.type() != CV_8UC1 || d.cols != extractor_->descriptorBytes() || d.rows != n)) {
@@ -65,6 +92,11 @@ FrameResult LoopDetector::addFeatures(const Features& features) {
                                 toString(extractor_->type()) + "), one per keypoint");
   }
   if (n == 0 && !d.empty()) throw std::invalid_argument("LoopDetector: descriptors without keypoints");
+  const bool rigid3d = options_.verification.model == GeometricModel::kRigid3d;
+  if (rigid3d && (points_m.size() != static_cast<size_t>(n) ||
+                  !std::all_of(points_m.begin(), points_m.end(), [](const Eigen::Vector3f& p) { return p.allFinite(); }))) {
+    throw std::invalid_argument("LoopDetector: 3D rigid verification needs one finite point per keypoint");
+  }
 
   const int blocks = descriptorBlocks(extractor_->descriptorBytes());
   std::vector<uint64_t> packed(static_cast<size_t>(n) * blocks);
@@ -78,6 +110,7 @@ FrameResult LoopDetector::addFeatures(const Features& features) {
   stored.points.reserve(n);
   for (const cv::KeyPoint& k : features.keypoints) stored.points.push_back(k.pt);
   stored.descriptors = n > 0 ? d.clone() : cv::Mat(0, extractor_->descriptorBytes(), CV_8U);
+  if (rigid3d) stored.points_m = std::move(points_m);
 
   // Verify the best frames of the top islands, and of the island the previous frame's loop predicts.
   std::vector<Island> candidates = islands(scores);
@@ -96,8 +129,13 @@ FrameResult LoopDetector::addFeatures(const Features& features) {
       verified.push_back(m.frame);
       const StoredFrame& ref = frames_[m.frame];
       const Verification v =
-          verifyGeometry(stored.points, stored.descriptors, ref.points, ref.descriptors, options_.verification);
-      if (!best || v.inliers > best->inliers) best = LoopCandidate{frame, m.frame, 0.0, v.inliers, v.matches, m.score};
+          rigid3d ? verifyRigid3d(stored.points_m, stored.descriptors, ref.points_m, ref.descriptors,
+                                  options_.verification)
+                  : verifyGeometry(stored.points, stored.descriptors, ref.points, ref.descriptors, options_.verification);
+      if (!best || v.inliers > best->inliers) {
+        best = LoopCandidate{frame, m.frame, 0.0, v.inliers, v.matches, m.score, std::nullopt};
+        if (rigid3d && v.inliers > 0) best->reference_from_query = v.reference_from_query;
+      }
     }
   }
   if (best) {

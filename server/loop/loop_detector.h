@@ -19,7 +19,9 @@
 ///  4. Islands: frames scoring ≥ island_score_fraction of the best, grouped
 ///     when fewer than island_gap_frames apart; an island scores the sum of
 ///     its frames' similarities.
-///  5. Geometric verification (fundamental-matrix RANSAC) of the
+///  5. Geometric verification (RANSAC of the options' model: a fundamental
+///     matrix, a 2D rigid motion, or a 3D rigid motion of keypoints lifted
+///     to metres through a point image) of the
 ///     verify_per_island most similar frames of the verify_islands best
 ///     islands, and of the island around r + 1 when the previous frame closed
 ///     a loop on r (the loop continues). The frame with most inliers is the
@@ -42,6 +44,7 @@
 /// exclusion window would close loops on itself). Thread-compatible, not
 /// thread-safe.
 
+#include <Eigen/Geometry>
 #include <cstdint>
 #include <deque>
 #include <memory>
@@ -52,6 +55,7 @@
 #include "loop/geometric_verification.h"
 #include "loop/incremental_vocabulary.h"
 #include "loop/inverted_index.h"
+#include "loop/point_image.h"
 
 namespace rmap::loop {
 
@@ -71,6 +75,10 @@ struct LoopDetectorOptions {
   double inlier_floor = 10.0;            ///< inliers that bring no evidence (what wrong places reach)
   double evidence_decay = 0.75;          ///< share of the previous frame's score a continuing loop inherits, [0, 1)
   double min_score = 10.0;               ///< acceptance threshold on the score
+  /// addFrame with a point image: a keypoint takes the point of the nearest pixel
+  /// that has one within this many pixels (a panorama's fill_iterations: its filled
+  /// pixels are that close to a real one), else it is dropped. ≥ 0.
+  int point_lift_radius_px = 4;
   /// @throws std::invalid_argument naming the first bad field
   void validate() const;
 };
@@ -82,6 +90,8 @@ struct LoopCandidate {
   int inliers = 0;               ///< geometric verification inliers
   int matches = 0;               ///< putative descriptor matches the inliers were drawn from
   double similarity = 0.0;       ///< tf-idf similarity of the two frames (InvertedIndex), 0..1
+  /// kRigid3d: the fitted motion, reference sensor frame from query sensor frame (metres).
+  std::optional<Eigen::Isometry3d> reference_from_query;
 };
 
 struct FrameResult {
@@ -99,10 +109,19 @@ class LoopDetector {
 
   /// Adds the next frame (8-bit grey, ≥ 32×32 px) and looks for a loop among older frames.
   /// @throws std::invalid_argument for an empty / wrong-type / too small image; state unchanged
+  /// @throws std::invalid_argument when the verification model is kRigid3d (it needs a point image)
   FrameResult addFrame(const cv::Mat& gray);
-  /// Same with features the caller extracted (same descriptor type as the extractor).
-  /// @throws std::invalid_argument when descriptors are not CV_8U rows of the extractor's width, one per keypoint
-  FrameResult addFeatures(const Features& features);
+  /// Same with the image's point image (point_image.h: CV_32FC3, same size): keypoints
+  /// without a point near them are dropped; kRigid3d verifies on the rest.
+  /// @throws std::invalid_argument for a bad image or point image; state unchanged
+  FrameResult addFrame(const cv::Mat& gray, const cv::Mat& points_m);
+  /// addFrame(image.gray), or with its point image when it has one.
+  FrameResult addFrame(const PlaceImage& image);
+  /// Same with features the caller extracted (same descriptor type as the extractor),
+  /// and for kRigid3d each keypoint's point (metres, sensor frame).
+  /// @throws std::invalid_argument when descriptors are not CV_8U rows of the extractor's width, one per keypoint,
+  ///         or kRigid3d is not given one finite point per keypoint
+  FrameResult addFeatures(const Features& features, std::vector<Eigen::Vector3f> points_m = {});
 
   size_t frames() const { return frames_.size(); }
   size_t vocabularyWords() const { return vocabulary_.size(); }
@@ -113,6 +132,7 @@ class LoopDetector {
  private:
   struct StoredFrame {
     std::vector<cv::Point2f> points;
+    std::vector<Eigen::Vector3f> points_m;  ///< kRigid3d: each keypoint's point
     cv::Mat descriptors;
   };
   struct Island {

@@ -90,6 +90,25 @@ void PanoramaOptions::validate() const {
   require(fill_iterations >= 0 && fill_iterations <= 64, "fill_iterations must be in [0, 64]");
 }
 
+cv::Mat panoramaPoints(const cv::Mat& point_index, std::span<const Eigen::Vector3f> points_sensor) {
+  if (point_index.type() != CV_32SC1) throw std::invalid_argument("panoramaPoints: point_index must be CV_32SC1");
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  cv::Mat points(point_index.size(), CV_32FC3, cv::Scalar::all(nan));
+  for (int v = 0; v < point_index.rows; ++v) {
+    for (int u = 0; u < point_index.cols; ++u) {
+      const int32_t i = point_index.at<int32_t>(v, u);
+      if (i < 0) continue;
+      if (static_cast<size_t>(i) >= points_sensor.size()) {
+        throw std::invalid_argument("panoramaPoints: point index " + std::to_string(i) + " beyond " +
+                                    std::to_string(points_sensor.size()) + " points");
+      }
+      const Eigen::Vector3f& p = points_sensor[static_cast<size_t>(i)];
+      points.at<cv::Vec3f>(v, u) = cv::Vec3f(p.x(), p.y(), p.z());
+    }
+  }
+  return points;
+}
+
 std::vector<float> estimateRingElevations(std::span<const Eigen::Vector3f> points_sensor, int ring_count,
                                           double gap_rad) {
   if (ring_count < 0) throw std::invalid_argument("estimateRingElevations: ring_count must be >= 0");

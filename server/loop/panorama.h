@@ -69,6 +69,11 @@ cv::Mat projectPanorama(std::span<const Eigen::Vector3f> points_sensor, std::spa
 cv::Mat projectPanorama(std::span<const Eigen::Vector3f> points_sensor, std::span<const float> intensities,
                         const PanoramaOptions& options, cv::Mat& point_index);
 
+/// The point image (point_image.h) of a panorama: each pixel's point from
+/// `point_index` (as projectPanorama gave it), NaN for −1.
+/// @throws std::invalid_argument unless point_index is CV_32SC1 with indices into points_sensor or −1
+cv::Mat panoramaPoints(const cv::Mat& point_index, std::span<const Eigen::Vector3f> points_sensor);
+
 /// Elevations (rad, ascending) of the laser rings of a cloud (sensor frame):
 /// the sorted elevations split at the ring_count − 1 widest gaps, or, with
 /// ring_count 0, at every gap wider than gap_rad; each ring is the median of its

@@ -17,8 +17,9 @@ class SameGreyRecognizer : public PlaceRecognizer {
  public:
   /// @param gate  each frame waits for it first, when valid
   explicit SameGreyRecognizer(std::shared_future<void> gate = {}) : gate_(std::move(gate)) {}
-  std::optional<Match> addFrame(const cv::Mat& gray) override {
+  std::optional<Match> addFrame(const PlaceImage& image) override {
     if (gate_.valid()) gate_.wait();
+    const cv::Mat& gray = image.gray;
     if (gray.type() != CV_8UC1) throw std::invalid_argument("not 8-bit grey");
     const double mean = cv::mean(gray)[0];
     means_.push_back(mean);

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <opencv2/imgproc.hpp>
+#include <random>
 
 #include "loop/binary_features.h"
 #include "loop/descriptor_matching.h"
@@ -59,6 +60,57 @@ TEST(GeometricVerification, ARigidFitTakesATurnedPictureButNotARescaledOne) {
   EXPECT_EQ(zoomed.inliers, 0);
   GeometricVerificationOptions bad = rigid;
   bad.max_scale_error = 1.0;
+  EXPECT_THROW(bad.validate(), std::invalid_argument);
+}
+
+/// One 3D point per keypoint, in a 10 × 6 × 3 m room.
+std::vector<Eigen::Vector3f> roomPoints(size_t n, uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> x(-5, 5), y(-3, 3), z(-1, 2);
+  std::vector<Eigen::Vector3f> p;
+  for (size_t i = 0; i < n; ++i) p.emplace_back(x(rng), y(rng), z(rng));
+  return p;
+}
+
+TEST(GeometricVerification, ARigid3dFitRecoversTheMotionOfLiftedKeypointsAndNotAnotherLayout) {
+  auto ex = makeExtractor();
+  const cv::Mat scene = test::texturedScene(11);
+  const Features a = ex->extract(scene);
+  const Features moved = ex->extract(test::shifted(scene, 6.0, -3.0));
+  const std::vector<Eigen::Vector3f> query = roomPoints(a.keypoints.size(), 1);
+  // The reference sees the same points from a pose 1.2 m away and turned 30°: each matched
+  // keypoint's point is the query's, moved; 2 cm of noise.
+  Eigen::Isometry3d truth = Eigen::Isometry3d::Identity();
+  truth.linear() = Eigen::AngleAxisd(0.52, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  truth.translation() = Eigen::Vector3d(1.0, -0.6, 0.2);
+  std::mt19937 rng(3);
+  std::normal_distribution<float> noise(0.0f, 0.02f);
+  // Keypoints of the shifted image: the same scene point as the nearest keypoint of `a` 6, −3 px back.
+  std::vector<Eigen::Vector3f> reference;
+  for (const cv::KeyPoint& k : moved.keypoints) {
+    size_t best = 0;
+    for (size_t i = 1; i < a.keypoints.size(); ++i) {
+      if (cv::norm(a.keypoints[i].pt + cv::Point2f(6, -3) - k.pt) < cv::norm(a.keypoints[best].pt + cv::Point2f(6, -3) - k.pt)) best = i;
+    }
+    reference.push_back((truth.cast<float>() * query[best]) + Eigen::Vector3f(noise(rng), noise(rng), noise(rng)));
+  }
+  GeometricVerificationOptions o;
+  o.model = GeometricModel::kRigid3d;
+  const Verification same = verifyRigid3d(query, a.descriptors, reference, moved.descriptors, o);
+  EXPECT_GT(same.inliers, 100);
+  EXPECT_LE(same.inliers, same.matches);
+  EXPECT_LT((same.reference_from_query.translation() - truth.translation()).norm(), 0.05);
+  EXPECT_LT(Eigen::AngleAxisd(same.reference_from_query.linear() * truth.linear().transpose()).angle(), 0.01);
+  // The same picture over points of another layout: descriptors match, their points do not move rigidly.
+  const Verification other =
+      verifyRigid3d(query, a.descriptors, roomPoints(moved.keypoints.size(), 2), moved.descriptors, o);
+  EXPECT_EQ(other.matches, same.matches);
+  EXPECT_LT(other.inliers, 12);
+  // Bad input.
+  EXPECT_THROW(verifyRigid3d(query, a.descriptors, reference, moved.descriptors.rowRange(0, 10), o),
+               std::invalid_argument);
+  GeometricVerificationOptions bad = o;
+  bad.ransac_threshold_m = 0.0;
   EXPECT_THROW(bad.validate(), std::invalid_argument);
 }
 

@@ -4,6 +4,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <cmath>
 #include <map>
 #include <random>
 #include <opencv2/imgcodecs.hpp>
@@ -73,6 +74,64 @@ TEST(LoopDetector, RevisitedSyntheticPlacesAreFoundAndNewOnesAreNot) {
     if (!r.accepted) continue;
     ++found;
     EXPECT_EQ(place_of_frame.at(r.best->reference_frame), place_of_frame.at(r.frame)) << "frame " << r.frame;
+  }
+  EXPECT_GE(found, 27);
+}
+
+/// A point image for a scene: pixel (u, v) shows a point of a wavy wall whose shape depends on `place`.
+cv::Mat wallPoints(const cv::Size& size, int place) {
+  cv::Mat points(size, CV_32FC3);
+  for (int v = 0; v < size.height; ++v) {
+    for (int u = 0; u < size.width; ++u) {
+      const float depth = 4.0f + 1.5f * std::sin(0.03f * u + place) + 0.8f * std::cos(0.05f * v - 2.0f * place);
+      points.at<cv::Vec3f>(v, u) = cv::Vec3f(depth, 0.02f * (160 - u), 0.02f * (120 - v));
+    }
+  }
+  return points;
+}
+
+/// `points` moved by (dx, dy) pixels like test::shifted, nearest pixel.
+cv::Mat shiftedPoints(const cv::Mat& points, double dx, double dy) {
+  cv::Mat out;
+  cv::warpAffine(points, out, cv::Matx23d(1, 0, dx, 0, 1, dy), points.size(), cv::INTER_NEAREST, cv::BORDER_REPLICATE);
+  return out;
+}
+
+TEST(LoopDetector, PointImagesVerifyRevisitsInMetres) {
+  LoopDetectorOptions o;
+  o.exclusion_window_frames = 10;
+  o.verification.model = GeometricModel::kRigid3d;
+  LoopDetector detector(o);
+  // Without its points a frame cannot be verified in 3D; a point image of another size is refused.
+  const cv::Mat first = test::texturedScene(100);
+  EXPECT_THROW(detector.addFrame(first), std::invalid_argument);
+  EXPECT_THROW(detector.addFrame(first, wallPoints(cv::Size(100, 100), 0)), std::invalid_argument);
+  EXPECT_THROW(detector.addFrame(first, cv::Mat(first.size(), CV_32FC1)), std::invalid_argument);
+  EXPECT_EQ(detector.frames(), 0u);
+
+  std::vector<FrameResult> results;
+  for (int tour = 0; tour < 2; ++tour) {
+    for (int place = 0; place < 10; ++place) {
+      const cv::Mat scene = test::texturedScene(100 + place);
+      const cv::Mat points = wallPoints(scene.size(), place);
+      for (int step = 0; step < 3; ++step) {
+        const double dx = 4.0 * step + 2.0 * tour, dy = 1.0 * tour;
+        results.push_back(detector.addFrame(PlaceImage(test::shifted(scene, dx, dy), shiftedPoints(points, dx, dy))));
+      }
+    }
+  }
+  int found = 0;
+  for (const FrameResult& r : results) {
+    if (r.frame < 30) {
+      EXPECT_FALSE(r.accepted) << "frame " << r.frame << " of the first tour";
+      continue;
+    }
+    if (!r.accepted) continue;
+    ++found;
+    EXPECT_EQ(r.best->reference_frame / 3, (r.frame - 30) / 3) << "frame " << r.frame;
+    // Each keypoint's point moved with the picture: the same points, so no motion.
+    ASSERT_TRUE(r.best->reference_from_query);
+    EXPECT_LT(r.best->reference_from_query->translation().norm(), 0.2) << "frame " << r.frame;
   }
   EXPECT_GE(found, 27);
 }
@@ -177,6 +236,7 @@ TEST(LoopDetector, OptionsAreValidated) {
   throws([](LoopDetectorOptions& o) { o.min_score = std::nan(""); });
   throws([](LoopDetectorOptions& o) { o.vocabulary.match_distance_fraction = 0.0; });
   throws([](LoopDetectorOptions& o) { o.verification.ransac_threshold_px = 0.0; });
+  throws([](LoopDetectorOptions& o) { o.point_lift_radius_px = -1; });
 }
 
 /// The first 60 Lip6 frames, the 60 frames that revisit them (from 460), then 40 places not seen

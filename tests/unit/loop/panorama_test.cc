@@ -87,6 +87,22 @@ TEST(Panorama, ClosestPointWinsAPixel) {
   EXPECT_EQ(index.at<int32_t>(0, 0), -1);
 }
 
+TEST(Panorama, PanoramaPointsPutEachPixelsPointInAPointImage) {
+  const std::vector<Eigen::Vector3f> points{{1, 2, 3}, {4, 5, 6}};
+  cv::Mat index(2, 3, CV_32SC1, cv::Scalar(-1));
+  index.at<int32_t>(0, 2) = 1;
+  index.at<int32_t>(1, 0) = 0;
+  const cv::Mat image = panoramaPoints(index, points);
+  ASSERT_EQ(image.type(), CV_32FC3);
+  ASSERT_EQ(image.size(), index.size());
+  EXPECT_EQ(image.at<cv::Vec3f>(0, 2), cv::Vec3f(4, 5, 6));
+  EXPECT_EQ(image.at<cv::Vec3f>(1, 0), cv::Vec3f(1, 2, 3));
+  EXPECT_TRUE(std::isnan(image.at<cv::Vec3f>(0, 0)[0]));
+  index.at<int32_t>(1, 1) = 2;  // beyond the points
+  EXPECT_THROW(panoramaPoints(index, points), std::invalid_argument);
+  EXPECT_THROW(panoramaPoints(cv::Mat(2, 3, CV_32FC1), points), std::invalid_argument);
+}
+
 TEST(Panorama, RingByColumnGivesEachRingAnEqualBand) {
   // Uneven ring spacing: a dense group near the horizon and two far rings.
   std::vector<Eigen::Vector3f> points;
