@@ -201,8 +201,8 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"equirectangular", "ring"}));
   ls->add_option("--descriptor", loop_sim.descriptor, "binary descriptor")->check(CLI::IsMember({"orb", "brisk", "akaze"}));
   ls->add_option("--verification", loop_sim.verification,
-                 "laser: geometric verification of panoramas, rigid3d (keypoints lifted to metres, as rmapd) or "
-                 "fundamental (image-only)")
+                 "laser: rigid3d = rmapd's panorama options (keypoints lifted to metres, two consecutive frames), "
+                 "fundamental = the detector's defaults (image only)")
       ->check(CLI::IsMember({"rigid3d", "fundamental"}));
   ls->add_option("--threads", loop_sim.threads, "OpenCV threads")->check(CLI::Range(1, 64));
   ls->add_option("--json", loop_sim.json_out, "write results as JSON to this file");

@@ -178,9 +178,9 @@ int runLoopSimBench(const LoopSimBenchOptions& options) {
   const loop::PanoramaOptions panorama =
       panoramaFor(options.panorama, projectionFromString(options.projection), so.lidar.rings);
   panorama.validate();
-  loop::LoopDetectorOptions detector = options.detector;
-  // Laser panoramas are verified as rmapd verifies them: in metres, through their points.
-  if (laser && options.verification == "rigid3d") detector.verification.model = loop::GeometricModel::kRigid3d;
+  // Laser panoramas as rmapd takes them (verified in metres, through their points), or by image only.
+  const loop::LoopDetectorOptions detector =
+      laser && options.verification == "rigid3d" ? loop::panoramaDetectorOptions() : options.detector;
 
   double render_ms = 0.0, project_ms = 0.0;
   cv::Size size;

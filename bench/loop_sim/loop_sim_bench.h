@@ -30,7 +30,7 @@ struct LoopSimBenchOptions {
   bool dark = false;                       ///< revisit laps in the dark (camera; laser unaffected)
   std::string projection = "equirectangular";  ///< laser: equirectangular | ring
   std::string descriptor = "orb";          ///< orb | brisk | akaze
-  std::string verification = "rigid3d";   ///< laser: rigid3d (as rmapd) | fundamental
+  std::string verification = "rigid3d";   ///< laser: rigid3d (rmapd's loop::panoramaDetectorOptions) | fundamental (`detector`)
   std::string json_out;
   SimSequenceOptions sequence;
   loop::PanoramaOptions panorama;          ///< laser; ring_count defaults to the lidar's rings

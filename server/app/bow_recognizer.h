@@ -13,7 +13,8 @@ class BowRecognizer : public PlaceRecognizer {
  public:
   explicit BowRecognizer(loop::LoopDetectorOptions options = {});
   /// The detector's accepted candidate (score: its acceptance score, the verified inliers).
-  std::optional<Match> addFrame(const PlaceImage& image) override;
+  /// Each robot is a stream of the detector.
+  std::optional<Match> addFrame(const PlaceImage& image, const std::string& robot_id) override;
 
  private:
   loop::LoopDetector detector_;

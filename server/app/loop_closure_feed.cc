@@ -90,7 +90,7 @@ void LoopClosureFeed::process(Frame& frame) {
   const auto start = std::chrono::steady_clock::now();
   std::optional<PlaceRecognizer::Match> match;
   try {
-    match = source.recognizer->addFrame(frame.image());
+    match = source.recognizer->addFrame(frame.image(), frame.place.robot_id);
   } catch (const std::invalid_argument& e) {
     metrics_.loop_frames_refused.fetch_add(1, std::memory_order_relaxed);
     spdlog::warn("map {}: {} frame of {} at {} ns not used for place recognition: {}", map_,

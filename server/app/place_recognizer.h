@@ -8,6 +8,7 @@
 #include <functional>
 #include <memory>
 #include <optional>
+#include <string>
 
 #include <opencv2/core/mat.hpp>
 
@@ -39,10 +40,11 @@ class PlaceRecognizer {
     double score = 0.0;            ///< acceptance score, higher = surer
   };
   virtual ~PlaceRecognizer() = default;
-  /// Adds the next frame (its index is the number of frames added before).
+  /// Adds the next frame (its index is the number of frames added before) of `robot_id`:
+  /// frames of several robots interleave, and an engine keeps each robot's sequence apart.
   /// @return the older frame it closes a loop with, when the engine accepts one
   /// @throws std::invalid_argument for an image the engine cannot use (state unchanged)
-  virtual std::optional<Match> addFrame(const PlaceImage& image) = 0;
+  virtual std::optional<Match> addFrame(const PlaceImage& image, const std::string& robot_id) = 0;
 };
 
 /// Makes the recognizer of a kind of frame, or nullptr when that kind is off.

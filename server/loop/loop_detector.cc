@@ -33,6 +33,13 @@ void LoopDetectorOptions::validate() const {
   require(point_lift_radius_px >= 0, "point_lift_radius_px must be >= 0");
 }
 
+LoopDetectorOptions panoramaDetectorOptions() {
+  LoopDetectorOptions o;
+  o.verification.model = GeometricModel::kRigid3d;
+  o.temporal_consistency_frames = 2;
+  return o;
+}
+
 namespace {
 
 constexpr int kMinImageSidePx = 32;
@@ -53,37 +60,41 @@ LoopDetector::LoopDetector(LoopDetectorOptions options, std::unique_ptr<FeatureE
       extractor_(orDefault(std::move(extractor))),
       vocabulary_(extractor_->descriptorBytes(), options_.vocabulary) {}
 
-FrameResult LoopDetector::addFrame(const cv::Mat& gray) {
-  if (options_.verification.model == GeometricModel::kRigid3d) {
-    throw std::invalid_argument("LoopDetector: 3D rigid verification needs the image's point image");
-  }
-  checkGrayImage(gray, kMinImageSidePx);
-  return addFeatures(extractor_->extract(gray));
-}
+FrameResult LoopDetector::addFrame(const cv::Mat& gray) { return addFrame(PlaceImage(gray)); }
 
-FrameResult LoopDetector::addFrame(const cv::Mat& gray, const cv::Mat& points_m) {
-  checkGrayImage(gray, kMinImageSidePx);
-  if (!isPointImage(points_m, gray.size())) {
+FrameResult LoopDetector::addFrame(const PlaceImage& image, const std::string& stream) {
+  checkGrayImage(image.gray, kMinImageSidePx);
+  if (image.points_m.empty()) {
+    if (options_.verification.model == GeometricModel::kRigid3d) {
+      throw std::invalid_argument("LoopDetector: 3D rigid verification needs the image's point image");
+    }
+    return addFeatures(extractor_->extract(image.gray), {}, stream);
+  }
+  if (!isPointImage(image.points_m, image.gray.size())) {
     throw std::invalid_argument("LoopDetector: the point image must be CV_32FC3 of the image's size");
   }
-  const Features all = extractor_->extract(gray);
+  const Features all = extractor_->extract(image.gray);
   Features kept;
   std::vector<Eigen::Vector3f> points;
   for (size_t i = 0; i < all.keypoints.size(); ++i) {
-    const std::optional<Eigen::Vector3f> p = pointNear(points_m, all.keypoints[i].pt, options_.point_lift_radius_px);
+    const std::optional<Eigen::Vector3f> p =
+        pointNear(image.points_m, all.keypoints[i].pt, options_.point_lift_radius_px);
     if (!p) continue;
     kept.keypoints.push_back(all.keypoints[i]);
     kept.descriptors.push_back(all.descriptors.row(static_cast<int>(i)));
     points.push_back(*p);
   }
-  return addFeatures(kept, std::move(points));
+  return addFeatures(kept, std::move(points), stream);
 }
 
-FrameResult LoopDetector::addFrame(const PlaceImage& image) {
-  return image.points_m.empty() ? addFrame(image.gray) : addFrame(image.gray, image.points_m);
+size_t LoopDetector::streamId(const std::string& name) {
+  const auto [it, added] = stream_ids_.try_emplace(name, streams_.size());
+  if (added) streams_.emplace_back();
+  return it->second;
 }
 
-FrameResult LoopDetector::addFeatures(const Features& features, std::vector<Eigen::Vector3f> points_m) {
+FrameResult LoopDetector::addFeatures(const Features& features, std::vector<Eigen::Vector3f> points_m,
+                                      const std::string& stream_name) {
   const cv::Mat& d = features.descriptors;
   const auto n = static_cast<int>(features.keypoints.size());
   if (n > 0 && (d.type() != CV_8UC1 || d.cols != extractor_->descriptorBytes() || d.rows != n)) {
@@ -103,10 +114,24 @@ FrameResult LoopDetector::addFeatures(const Features& features, std::vector<Eige
   for (int i = 0; i < n; ++i) packDescriptor(d.ptr<uint8_t>(i), d.cols, packed.data() + static_cast<size_t>(i) * blocks);
 
   const auto frame = static_cast<int64_t>(frames_.size());
-  std::vector<WordId> words = assignWords(features, packed);
-  const std::vector<FrameScore> scores = index_.score(words, frame - options_.exclusion_window_frames);
+  const size_t stream_id = streamId(stream_name);
+  Stream& stream = streams_[stream_id];
+  const auto ordinal = static_cast<int64_t>(stream.frames.size());
+  std::vector<WordId> words = assignWords(features, packed, stream);
+  std::vector<FrameScore> scores = index_.score(words, frame);
+  // The stream's own recent frames look alike without being loops; other streams' may be the same place.
+  const int64_t window_start = ordinal >= options_.exclusion_window_frames
+                                   ? stream.frames[ordinal - options_.exclusion_window_frames]
+                                   : 0;
+  std::erase_if(scores, [&](const FrameScore& s) {
+    const StoredFrame& f = frames_[s.frame];
+    if (options_.exclusion_window_all_streams) return s.frame >= window_start;
+    return f.stream == stream_id && f.ordinal >= ordinal - options_.exclusion_window_frames;
+  });
 
   StoredFrame stored;
+  stored.stream = stream_id;
+  stored.ordinal = ordinal;
   stored.points.reserve(n);
   for (const cv::KeyPoint& k : features.keypoints) stored.points.push_back(k.pt);
   stored.descriptors = n > 0 ? d.clone() : cv::Mat(0, extractor_->descriptorBytes(), CV_8U);
@@ -115,7 +140,9 @@ FrameResult LoopDetector::addFeatures(const Features& features, std::vector<Eige
   // Verify the best frames of the top islands, and of the island the previous frame's loop predicts.
   std::vector<Island> candidates = islands(scores);
   if (candidates.size() > static_cast<size_t>(options_.verify_islands)) candidates.resize(options_.verify_islands);
-  if (const std::optional<Island> predicted = predictedIsland(scores, frame)) candidates.push_back(*predicted);
+  if (const std::optional<Island> predicted = predictedIsland(scores, stream_id, ordinal, window_start)) {
+    candidates.push_back(*predicted);
+  }
   std::optional<LoopCandidate> best;
   std::vector<int64_t> verified;
   for (Island& island : candidates) {
@@ -140,7 +167,7 @@ FrameResult LoopDetector::addFeatures(const Features& features, std::vector<Eige
   }
   if (best) {
     best->score = best->inliers - options_.inlier_floor;
-    const std::optional<LoopCandidate>& previous = recent_.empty() ? std::nullopt : recent_.back();
+    const std::optional<LoopCandidate>& previous = stream.recent.empty() ? std::nullopt : stream.recent.back();
     if (best->score > 0.0 && previous && continues(*previous, best->reference_frame)) {
       best->score += options_.evidence_decay * std::max(0.0, previous->score);
     }
@@ -148,30 +175,34 @@ FrameResult LoopDetector::addFeatures(const Features& features, std::vector<Eige
 
   FrameResult result;
   result.frame = frame;
-  if (best && temporallyConsistent(best->reference_frame)) {
+  if (best && temporallyConsistent(stream, best->reference_frame)) {
     result.best = best;
     result.accepted = best->score >= options_.min_score;
   }
 
   index_.addFrame(words);
   frames_.push_back(std::move(stored));
-  previous_words_ = std::move(words);
-  recent_.push_back(best);
-  while (recent_.size() > static_cast<size_t>(std::max(1, options_.temporal_consistency_frames - 1))) recent_.pop_front();
-  purge(frame);
+  stream.frames.push_back(frame);
+  stream.previous_words = std::move(words);
+  stream.recent.push_back(best);
+  while (stream.recent.size() > static_cast<size_t>(std::max(1, options_.temporal_consistency_frames - 1))) {
+    stream.recent.pop_front();
+  }
+  purge(stream, ordinal);
   return result;
 }
 
-std::vector<WordId> LoopDetector::assignWords(const Features& features, const std::vector<uint64_t>& packed) {
+std::vector<WordId> LoopDetector::assignWords(const Features& features, const std::vector<uint64_t>& packed,
+                                              Stream& stream) {
   const int n = static_cast<int>(features.keypoints.size());
   const int blocks = descriptorBlocks(extractor_->descriptorBytes());
   std::vector<WordId> words(n, -1);
   std::vector<bool> moved(n, false);  // reinforced, and its descriptor changed
-  if (!frames_.empty()) {
+  if (!stream.frames.empty()) {
     const int track_bits = static_cast<int>(options_.track_distance_fraction * vocabulary_.descriptorBits());
-    for (const auto& [i, j] :
-         mutualMatches(features.descriptors, frames_.back().descriptors, track_bits, options_.track_ratio)) {
-      if (vocabulary_.alive(previous_words_[j])) words[i] = previous_words_[j];
+    for (const auto& [i, j] : mutualMatches(features.descriptors, frames_[stream.frames.back()].descriptors,
+                                            track_bits, options_.track_ratio)) {
+      if (vocabulary_.alive(stream.previous_words[j])) words[i] = stream.previous_words[j];
     }
   }
   std::vector<WordId> created;
@@ -197,7 +228,9 @@ std::vector<WordId> LoopDetector::assignWords(const Features& features, const st
     index_.mergeWords(keep, gone);
     std::replace(words.begin(), words.end(), gone, keep);
   }
-  if (options_.purge_after_frames > 0) new_words_.emplace_back(static_cast<int64_t>(frames_.size()), std::move(created));
+  if (options_.purge_after_frames > 0) {
+    stream.new_words.emplace_back(static_cast<int64_t>(stream.frames.size()), std::move(created));
+  }
   return words;
 }
 
@@ -208,14 +241,20 @@ std::vector<LoopDetector::Island> LoopDetector::islands(std::vector<FrameScore> 
   if (top < options_.min_similarity || top <= 0.0) return out;
   const double floor = std::max(options_.min_similarity, options_.island_score_fraction * top);
   std::erase_if(scores, [&](const FrameScore& s) { return s.score < floor; });
-  std::sort(scores.begin(), scores.end(), [](const FrameScore& a, const FrameScore& b) { return a.frame < b.frame; });
+  // Frame indices grow with each stream's ordinals: sorted by stream then index, each stream's run is in its order.
+  std::sort(scores.begin(), scores.end(), [&](const FrameScore& a, const FrameScore& b) {
+    const size_t sa = frames_[a.frame].stream, sb = frames_[b.frame].stream;
+    return sa != sb ? sa < sb : a.frame < b.frame;
+  });
   for (const FrameScore& s : scores) {
-    if (out.empty() || s.frame - out.back().last >= options_.island_gap_frames) {
+    const StoredFrame& f = frames_[s.frame];
+    if (out.empty() || f.stream != out.back().stream || f.ordinal - out.back().last >= options_.island_gap_frames) {
       out.emplace_back();
-      out.back().first = s.frame;
+      out.back().stream = f.stream;
+      out.back().first = f.ordinal;
     }
     Island& island = out.back();
-    island.last = s.frame;
+    island.last = f.ordinal;
     island.score += s.score;
     island.members.push_back(s);
   }
@@ -224,51 +263,63 @@ std::vector<LoopDetector::Island> LoopDetector::islands(std::vector<FrameScore> 
 }
 
 std::optional<LoopDetector::Island> LoopDetector::predictedIsland(const std::vector<FrameScore>& scores,
-                                                                  int64_t frame) const {
-  if (recent_.empty() || !recent_.back() || recent_.back()->score < options_.min_score) return std::nullopt;
-  // The previous frame closed a loop on r: this one most likely closes on the frames around r + 1.
-  const int64_t r = recent_.back()->reference_frame + 1;
+                                                                  size_t stream_id, int64_t own_frames,
+                                                                  int64_t window_start) const {
+  const Stream& own = streams_[stream_id];
+  if (own.recent.empty() || !own.recent.back() || own.recent.back()->score < options_.min_score) return std::nullopt;
+  // The stream's previous frame closed a loop on r: this one most likely closes on the frames
+  // around r's successor in r's stream.
+  const StoredFrame& reference = frames_[own.recent.back()->reference_frame];
+  const Stream& theirs = streams_[reference.stream];
+  const int64_t r = reference.ordinal + 1;
+  int64_t last = std::min<int64_t>(r + options_.island_gap_frames, static_cast<int64_t>(theirs.frames.size()) - 1);
+  if (reference.stream == stream_id) last = std::min<int64_t>(last, own_frames - options_.exclusion_window_frames - 1);
+  if (options_.exclusion_window_all_streams) {
+    while (last >= 0 && theirs.frames[last] >= window_start) --last;
+  }
   const int64_t first = std::max<int64_t>(0, r - options_.island_gap_frames);
-  const int64_t last = std::min<int64_t>(r + options_.island_gap_frames, frame - options_.exclusion_window_frames - 1);
   if (last < first) return std::nullopt;
   Island island;
+  island.stream = reference.stream;
   island.first = first;
   island.last = last;
   for (const FrameScore& s : scores) {
-    if (s.frame >= first && s.frame <= last) {
+    const StoredFrame& f = frames_[s.frame];
+    if (f.stream == reference.stream && f.ordinal >= first && f.ordinal <= last) {
       island.members.push_back(s);
       island.score += s.score;
     }
   }
-  if (island.members.empty()) island.members.push_back({std::clamp(r, first, last), 0.0});
+  if (island.members.empty()) island.members.push_back({theirs.frames[std::clamp(r, first, last)], 0.0});
   return island;
 }
 
 bool LoopDetector::continues(const LoopCandidate& earlier, int64_t reference) const {
-  return earlier.inliers > 0 && std::abs(earlier.reference_frame - reference) <= options_.island_gap_frames;
+  const StoredFrame &a = frames_[earlier.reference_frame], &b = frames_[reference];
+  return earlier.inliers > 0 && a.stream == b.stream && std::abs(a.ordinal - b.ordinal) <= options_.island_gap_frames;
 }
 
-bool LoopDetector::temporallyConsistent(int64_t reference) const {
+bool LoopDetector::temporallyConsistent(const Stream& stream, int64_t reference) const {
   const size_t needed = static_cast<size_t>(options_.temporal_consistency_frames - 1);
-  if (recent_.size() < needed) return false;
+  if (stream.recent.size() < needed) return false;
   int64_t later = reference;
   for (size_t k = 0; k < needed; ++k) {
-    const std::optional<LoopCandidate>& earlier = recent_[recent_.size() - 1 - k];
+    const std::optional<LoopCandidate>& earlier = stream.recent[stream.recent.size() - 1 - k];
     if (!earlier || !continues(*earlier, later)) return false;
     later = earlier->reference_frame;
   }
   return true;
 }
 
-void LoopDetector::purge(int64_t frame) {
-  while (!new_words_.empty() && new_words_.front().first + options_.purge_after_frames <= frame) {
-    for (WordId w : new_words_.front().second) {
+void LoopDetector::purge(Stream& stream, int64_t ordinal) {
+  while (!stream.new_words.empty() && stream.new_words.front().first + options_.purge_after_frames <= ordinal) {
+    for (WordId w : stream.new_words.front().second) {
       if (vocabulary_.alive(w) && index_.documentFrequency(w) <= 1) {
         vocabulary_.remove(w);
         index_.removeWord(w);
       }
     }
-    new_words_.pop_front();
+    stream.new_words.pop_front();
   }
 }
 

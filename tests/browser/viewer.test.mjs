@@ -11,7 +11,7 @@ import fs from 'node:fs';
 import { after, before, describe, test } from 'node:test';
 
 import {
-  artifactPath, getJson, launchBrowser, log, openViewerPage, sleep, startRmapd, startSim, waitFor,
+  artifactPath, getJson, launchBrowser, log, openViewerPage, sleep, startRmapd, startSim, waitFor, waitForIdleFusion,
 } from './lib/harness.mjs';
 import { VIEWER_BACKGROUND, decodePng, foregroundStats } from './lib/png.mjs';
 import { virtualTimeScreenshot } from './lib/virtual_time.mjs';
@@ -160,7 +160,7 @@ describe('web viewer', { timeout: 230000 }, () => {
     // A still map, so the page's answer and ours are read from the same map.
     await sim.stop();
     log('rmap-sim stopped');
-    await sleep(1500);
+    log(`map settled at ${await waitForIdleFusion(server, 'sim')} cuboids`);
     await waitFor('tiles loaded', () => hook((v) => v.tileStats().pending === 0), { timeout: 20000 });
     const rect = await canvasRect(page);
     let pick = null;

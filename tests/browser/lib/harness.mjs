@@ -147,6 +147,24 @@ export async function waitFor(what, fn, { timeout = 30000, interval = 200 } = {}
   }
 }
 
+/**
+ * Waits until a map whose robots stopped is done fusing: rmapd fuses an idle map's cuboids
+ * about a second after its last message (later on a loaded or sanitized server), so two reads
+ * of one point can see different cuboids until its cuboid count holds (2.5 s, as the
+ * integration tests' waitForIdleFusion).
+ */
+export async function waitForIdleFusion(server, map, { timeout = 60000 } = {}) {
+  const end = Date.now() + timeout;
+  let before = (await getJson(server, `/v1/maps/${map}`)).cuboids;
+  while (Date.now() < end) {
+    await sleep(2500);
+    const now = (await getJson(server, `/v1/maps/${map}`)).cuboids;
+    if (now === before) return now;
+    before = now;
+  }
+  throw new Error(`map ${map} still changing after ${timeout} ms`);
+}
+
 /** Launches Chromium with the outside checks' flags. */
 export async function launchBrowser() {
   // playwright-core lives in web/node_modules (web/package.json), not beside the tests.

@@ -23,9 +23,9 @@ cv::Mat texture(int seed) {
 TEST(BowRecognizer, ARevisitedPlaceMatchesItsFirstVisitAndNewPlacesDoNot) {
   BowRecognizer recognizer;
   constexpr int kPlaces = 60;  // more than the detector's window of recent frames
-  for (int i = 0; i < kPlaces; ++i) EXPECT_FALSE(recognizer.addFrame(texture(i))) << "frame " << i;
+  for (int i = 0; i < kPlaces; ++i) EXPECT_FALSE(recognizer.addFrame(texture(i), "r1")) << "frame " << i;
   std::optional<PlaceRecognizer::Match> match;
-  for (int i = 0; i < 3 && !match; ++i) match = recognizer.addFrame(texture(i));
+  for (int i = 0; i < 3 && !match; ++i) match = recognizer.addFrame(texture(i), "r1");
   ASSERT_TRUE(match);
   EXPECT_LE(match->reference_frame, 2);
   EXPECT_GT(match->score, 0.0);
@@ -38,6 +38,14 @@ TEST(BowRecognizer, TheConfigTurnsKindsOff) {
   EXPECT_EQ(factory(FrameKind::kCamera), nullptr);
   EXPECT_NE(factory(FrameKind::kIntensityPanorama), nullptr);
   EXPECT_NE(factory(FrameKind::kReflectivityPatch), nullptr);
+}
+
+TEST(BowRecognizer, PanoramasAreVerifiedInMetresSoTheyNeedTheirPoints) {
+  const std::unique_ptr<PlaceRecognizer> panoramas = bowRecognizers(LoopClosureConfig{})(FrameKind::kIntensityPanorama);
+  ASSERT_NE(panoramas, nullptr);
+  EXPECT_THROW(panoramas->addFrame(texture(0), "r1"), std::invalid_argument);
+  const cv::Mat points(240, 320, CV_32FC3, cv::Scalar(3.0f, 1.0f, 0.5f));
+  EXPECT_NO_THROW(panoramas->addFrame(PlaceImage(texture(0), points), "r1"));
 }
 
 }  // namespace

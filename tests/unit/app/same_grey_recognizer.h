@@ -7,6 +7,7 @@
 #include <future>
 #include <opencv2/core.hpp>
 #include <stdexcept>
+#include <string>
 #include <vector>
 
 #include "app/place_recognizer.h"
@@ -17,7 +18,7 @@ class SameGreyRecognizer : public PlaceRecognizer {
  public:
   /// @param gate  each frame waits for it first, when valid
   explicit SameGreyRecognizer(std::shared_future<void> gate = {}) : gate_(std::move(gate)) {}
-  std::optional<Match> addFrame(const PlaceImage& image) override {
+  std::optional<Match> addFrame(const PlaceImage& image, const std::string& /*robot_id*/) override {
     if (gate_.valid()) gate_.wait();
     const cv::Mat& gray = image.gray;
     if (gray.type() != CV_8UC1) throw std::invalid_argument("not 8-bit grey");

@@ -68,15 +68,13 @@ TEST(LoopSim, CameraAndLaserRecogniseRevisitsAndOnlyLaserDoesInTheDark) {
   const DetectorRun camera_lit = runDetector(camera(lit), lit.size(), loop::DescriptorType::kOrb);
   const DetectorRun camera_dark = runDetector(camera(dark), dark.size(), loop::DescriptorType::kOrb);
   const loop::PanoramaOptions panorama = smallPanorama();
-  // Panoramas as rmapd verifies them: keypoints lifted to their points, a 3D rigid fit.
-  loop::LoopDetectorOptions in_metres;
-  in_metres.verification.model = loop::GeometricModel::kRigid3d;
+  // Panoramas as rmapd takes them: keypoints lifted to their points, a 3D rigid fit.
   const DetectorRun laser = runDetector([&](size_t i) {
     const SensorScan s = dark.lidarScan(i);
     cv::Mat index;
     cv::Mat gray = loop::projectPanorama(s.points_sensor, s.intensities, panorama, index);
     return loop::PlaceImage(std::move(gray), loop::panoramaPoints(index, s.points_sensor));
-  }, dark.size(), loop::DescriptorType::kOrb, in_metres);
+  }, dark.size(), loop::DescriptorType::kOrb, loop::panoramaDetectorOptions());
   // Issue 6 targets: 100 % precision at ≥ 60 % recall for both modalities (the
   // swept curve); camera recall collapses in the dark while laser-intensity
   // recall stays ≥ 60 %. At the detector's own threshold precision stays high.

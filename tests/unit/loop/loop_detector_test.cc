@@ -78,6 +78,58 @@ TEST(LoopDetector, RevisitedSyntheticPlacesAreFoundAndNewOnesAreNot) {
   EXPECT_GE(found, 27);
 }
 
+/// Robot "a" tours ten places; robot "b" follows one place behind, their frames interleaved:
+/// each of b's frames is a place a saw a few frames ago (inside a 10-frame exclusion window).
+struct FollowerTour {
+  std::map<int64_t, std::pair<std::string, int>> seen;  // frame → (stream, place)
+  std::vector<FrameResult> of_a, of_b;
+
+  explicit FollowerTour(LoopDetector& detector) {
+    for (int place = 0; place <= 10; ++place) {
+      for (int step = 0; step < 3; ++step) {
+        if (place < 10) {
+          const cv::Mat image = test::shifted(test::texturedScene(100 + place), 4.0 * step, 0.0);
+          of_a.push_back(detector.addFrame(PlaceImage(image), "a"));
+          seen[of_a.back().frame] = {"a", place};
+        }
+        if (place >= 1) {
+          const cv::Mat image = test::shifted(test::texturedScene(100 + place - 1), 4.0 * step + 2.0, 1.0);
+          of_b.push_back(detector.addFrame(PlaceImage(image), "b"));
+          seen[of_b.back().frame] = {"b", place - 1};
+        }
+      }
+    }
+  }
+};
+
+TEST(LoopDetector, InterleavedStreamsKeepTheirOwnSequenceAndCloseLoopsWithEachOther) {
+  LoopDetectorOptions o;
+  o.exclusion_window_frames = 10;
+  o.temporal_consistency_frames = 2;  // the previous frame of b's stream must chain, not a's
+  LoopDetector detector(o);
+  const FollowerTour tour(detector);
+  for (const FrameResult& r : tour.of_a) EXPECT_FALSE(r.accepted) << "a's frame " << r.frame << " is a new place";
+  int found = 0;
+  for (const FrameResult& r : tour.of_b) {
+    if (!r.accepted) continue;
+    ++found;
+    EXPECT_EQ(tour.seen.at(r.best->reference_frame).first, "a") << "frame " << r.frame;
+    EXPECT_EQ(tour.seen.at(r.best->reference_frame).second, tour.seen.at(r.frame).second) << "frame " << r.frame;
+  }
+  // All but b's first frame, which has no predecessor in its stream to chain with.
+  EXPECT_GE(found, 27);
+}
+
+TEST(LoopDetector, AWindowOverAllStreamsKeepsOtherRobotsRecentFramesOut) {
+  LoopDetectorOptions o;
+  o.exclusion_window_frames = 10;
+  o.exclusion_window_all_streams = true;  // as for patches cut from one shared map
+  LoopDetector detector(o);
+  const FollowerTour tour(detector);
+  for (const FrameResult& r : tour.of_b) EXPECT_FALSE(r.accepted) << "b's frame " << r.frame;
+  for (const FrameResult& r : tour.of_a) EXPECT_FALSE(r.accepted) << "a's frame " << r.frame;
+}
+
 /// A point image for a scene: pixel (u, v) shows a point of a wavy wall whose shape depends on `place`.
 cv::Mat wallPoints(const cv::Size& size, int place) {
   cv::Mat points(size, CV_32FC3);
@@ -105,8 +157,8 @@ TEST(LoopDetector, PointImagesVerifyRevisitsInMetres) {
   // Without its points a frame cannot be verified in 3D; a point image of another size is refused.
   const cv::Mat first = test::texturedScene(100);
   EXPECT_THROW(detector.addFrame(first), std::invalid_argument);
-  EXPECT_THROW(detector.addFrame(first, wallPoints(cv::Size(100, 100), 0)), std::invalid_argument);
-  EXPECT_THROW(detector.addFrame(first, cv::Mat(first.size(), CV_32FC1)), std::invalid_argument);
+  EXPECT_THROW(detector.addFrame(PlaceImage(first, wallPoints(cv::Size(100, 100), 0))), std::invalid_argument);
+  EXPECT_THROW(detector.addFrame(PlaceImage(first, cv::Mat(first.size(), CV_32FC1))), std::invalid_argument);
   EXPECT_EQ(detector.frames(), 0u);
 
   std::vector<FrameResult> results;
