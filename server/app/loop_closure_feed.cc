@@ -108,8 +108,7 @@ void LoopClosureFeed::process(Frame& frame) {
                   match->reference_frame, source.places.size());
     return;
   }
-  deliver({map_, sourceOf(frame.kind), source.places.back(), source.places[reference], match->score,
-           match->reference_from_query});
+  deliver({map_, sourceOf(frame.kind), source.places.back(), source.places[reference], match->score});
 }
 
 void LoopClosureFeed::deliver(const LoopClosure& closure) {
