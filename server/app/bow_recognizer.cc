@@ -7,7 +7,7 @@ BowRecognizer::BowRecognizer(loop::LoopDetectorOptions options) : detector_(std:
 std::optional<PlaceRecognizer::Match> BowRecognizer::addFrame(const PlaceImage& image, const std::string& robot_id) {
   const loop::FrameResult result = detector_.addFrame(image, robot_id);
   if (!result.accepted || !result.best) return std::nullopt;
-  return Match{result.best->reference_frame, result.best->score};
+  return Match{result.best->reference_frame, result.best->score, result.best->reference_from_query};
 }
 
 RecognizerFactory bowRecognizers(const LoopClosureConfig& config) {

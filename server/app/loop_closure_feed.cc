@@ -108,7 +108,8 @@ void LoopClosureFeed::process(Frame& frame) {
                   match->reference_frame, source.places.size());
     return;
   }
-  deliver({map_, sourceOf(frame.kind), source.places.back(), source.places[reference], match->score});
+  deliver({map_, sourceOf(frame.kind), source.places.back(), source.places[reference], match->score,
+           match->reference_from_query});
 }
 
 void LoopClosureFeed::deliver(const LoopClosure& closure) {

@@ -4,15 +4,17 @@ namespace rmap::app {
 
 namespace {
 
+/// {position [x,y,z], orientation [w,x,y,z]} of a pose, or nulls.
+nlohmann::json poseJson(const std::optional<Eigen::Isometry3d>& pose) {
+  if (!pose) return {{"position", nullptr}, {"orientation", nullptr}};
+  const Eigen::Vector3d p = pose->translation();
+  const Eigen::Quaterniond q(pose->linear());
+  return {{"position", {p.x(), p.y(), p.z()}}, {"orientation", {q.w(), q.x(), q.y(), q.z()}}};
+}
+
 nlohmann::json placeJson(const LoopPlace& place) {
-  nlohmann::json out{{"robot_id", place.robot_id}, {"stamp_ns", place.stamp_ns}, {"position", nullptr},
-                     {"orientation", nullptr}};
-  if (place.pose) {
-    const Eigen::Vector3d p = place.pose->translation();
-    const Eigen::Quaterniond q(place.pose->linear());
-    out["position"] = {p.x(), p.y(), p.z()};
-    out["orientation"] = {q.w(), q.x(), q.y(), q.z()};
-  }
+  nlohmann::json out{{"robot_id", place.robot_id}, {"stamp_ns", place.stamp_ns}};
+  out.update(poseJson(place.pose));
   return out;
 }
 
@@ -36,7 +38,8 @@ std::optional<LoopSource> parseLoopSource(std::string_view name) {
 
 store::LoopClosureRecord toRecord(const LoopClosure& c, int64_t detected_ns) {
   // The body keeps what the store does not index: the poses and the score.
-  const nlohmann::json body{{"score", c.score}, {"query", placeJson(c.query)}, {"match", placeJson(c.match)}};
+  nlohmann::json body{{"score", c.score}, {"query", placeJson(c.query)}, {"match", placeJson(c.match)}};
+  if (c.match_from_query) body["relative_pose"] = poseJson(c.match_from_query);
   return {0,
           c.map,
           toString(c.source),
@@ -56,7 +59,9 @@ nlohmann::json loopClosureJson(const store::LoopClosureRecord& r) {
           {"score", body.at("score")},
           {"detected_ns", r.detected_ns},
           {"query", body.at("query")},
-          {"match", body.at("match")}};
+          {"match", body.at("match")},
+          // Closures stored before it was measured have none.
+          {"relative_pose", body.value("relative_pose", nlohmann::json(nullptr))}};
 }
 
 }  // namespace rmap::app

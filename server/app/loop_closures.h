@@ -37,6 +37,10 @@ struct LoopClosure {
   LoopPlace query;   ///< the newer place, whose frame found the loop
   LoopPlace match;   ///< the older place it matched
   double score = 0;  ///< the detector's acceptance score (higher = surer; geometry: match score 0..1)
+  /// The query place's sensor pose in the match place's sensor frame (metres), as the loop
+  /// closure measured it (geometry: the scan-to-submap match; laser-intensity panoramas: the
+  /// 3D rigid fit); unknown otherwise.
+  std::optional<Eigen::Isometry3d> match_from_query;
 };
 
 /// Takes accepted loop closures (store, viewers, metrics).
@@ -44,9 +48,10 @@ using LoopClosureSink = std::function<void(const LoopClosure&)>;
 
 /// The stored form; `detected_ns` is the wall clock of the detection.
 store::LoopClosureRecord toRecord(const LoopClosure& closure, int64_t detected_ns);
-/// JSON of a stored loop closure: id, map, source, score, detected_ns, and
+/// JSON of a stored loop closure: id, map, source, score, detected_ns,
 /// query and match as {robot_id, stamp_ns, position [x,y,z] m, orientation [w,x,y,z]}
-/// (position and orientation null when the pose is unknown).
+/// (position and orientation null when the pose is unknown), and relative_pose
+/// {position, orientation} (match_from_query; null when not measured).
 /// @throws nlohmann::json::exception when the stored body is not JSON
 nlohmann::json loopClosureJson(const store::LoopClosureRecord& record);
 

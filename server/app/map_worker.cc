@@ -366,7 +366,8 @@ void MapWorker::applyScan(int64_t log_id, const v1::RobotMessage& message, const
   // Stored by the feed's thread: a durable write per closure would hold this worker's acks back.
   for (const slam2d::LoopClosure2d& c : result->closures) {
     loop_feed_->post({name_, LoopSource::kGeometry, {c.query_trajectory, c.query_stamp_ns, planarIsometry(c.query_pose, 0.0)},
-                      {c.match_trajectory, c.match_stamp_ns, planarIsometry(c.match_pose, 0.0)}, c.score});
+                      {c.match_trajectory, c.match_stamp_ns, planarIsometry(c.match_pose, 0.0)}, c.score,
+                      planarIsometry(c.relative, 0.0)});
   }
   if (!in_map3d) {
     if (planar.in_map3d) {

@@ -38,6 +38,8 @@ class PlaceRecognizer {
   struct Match {
     int64_t reference_frame = -1;  ///< 0-based index of the older frame
     double score = 0.0;            ///< acceptance score, higher = surer
+    /// The new frame's sensor pose in the older frame's sensor frame (metres), when measured.
+    std::optional<Eigen::Isometry3d> reference_from_query;
   };
   virtual ~PlaceRecognizer() = default;
   /// Adds the next frame (its index is the number of frames added before) of `robot_id`:

@@ -139,7 +139,7 @@ Verification verifyRigid3d(const std::vector<Eigen::Vector3f>& query_points_m, c
     const double all_inliers = std::pow(static_cast<double>(count) / n, 3);
     if (all_inliers >= 1.0) break;
     const double needed = std::log(1.0 - options.ransac_confidence) / std::log(1.0 - all_inliers);
-    iterations = std::min(iterations, static_cast<int>(std::ceil(needed)));
+    iterations = static_cast<int>(std::min<double>(iterations, std::ceil(needed)));  // in double: needed may pass INT_MAX
   }
   if (best < 3) return v;
   // Refined on the sample's inliers; kept when it holds at least as many.

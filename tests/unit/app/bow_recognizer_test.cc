@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <opencv2/imgproc.hpp>
 
 namespace rmap::app {
@@ -40,12 +41,36 @@ TEST(BowRecognizer, TheConfigTurnsKindsOff) {
   EXPECT_NE(factory(FrameKind::kReflectivityPatch), nullptr);
 }
 
-TEST(BowRecognizer, PanoramasAreVerifiedInMetresSoTheyNeedTheirPoints) {
+/// A point image for texture(seed): a wall whose depth varies with the pixel and the seed, metres.
+cv::Mat wall(int seed) {
+  cv::Mat points(240, 320, CV_32FC3);
+  for (int v = 0; v < points.rows; ++v) {
+    for (int u = 0; u < points.cols; ++u) {
+      const float depth = 5.0f + std::sin(0.02f * u + seed) + 0.5f * std::cos(0.03f * v + seed);
+      points.at<cv::Vec3f>(v, u) = cv::Vec3f(depth, 0.02f * (160 - u), 0.02f * (120 - v));
+    }
+  }
+  return points;
+}
+
+TEST(BowRecognizer, PanoramasAreVerifiedInMetresAndTheMatchCarriesTheMeasuredPose) {
   const std::unique_ptr<PlaceRecognizer> panoramas = bowRecognizers(LoopClosureConfig{})(FrameKind::kIntensityPanorama);
   ASSERT_NE(panoramas, nullptr);
-  EXPECT_THROW(panoramas->addFrame(texture(0), "r1"), std::invalid_argument);
-  const cv::Mat points(240, 320, CV_32FC3, cv::Scalar(3.0f, 1.0f, 0.5f));
-  EXPECT_NO_THROW(panoramas->addFrame(PlaceImage(texture(0), points), "r1"));
+  EXPECT_THROW(panoramas->addFrame(texture(0), "r1"), std::invalid_argument);  // no points
+  constexpr int kPlaces = 60;
+  for (int i = 0; i < kPlaces; ++i) EXPECT_FALSE(panoramas->addFrame(PlaceImage(texture(i), wall(i)), "r1"));
+  // The sensor is back at places 0, 1, 2, … 0.4 m further along x: every point 0.4 m nearer.
+  std::optional<PlaceRecognizer::Match> match;
+  for (int i = 0; i < 5 && !match; ++i) {
+    cv::Mat nearer = wall(i) - cv::Scalar(0.4f, 0.0f, 0.0f);
+    match = panoramas->addFrame(PlaceImage(texture(i), nearer), "r1");
+  }
+  ASSERT_TRUE(match);
+  EXPECT_LE(match->reference_frame, 4);
+  ASSERT_TRUE(match->reference_from_query);
+  // The new sensor pose in the old sensor frame: 0.4 m forward.
+  EXPECT_NEAR(match->reference_from_query->translation().x(), 0.4, 0.05);
+  EXPECT_NEAR(match->reference_from_query->translation().y(), 0.0, 0.05);
 }
 
 }  // namespace

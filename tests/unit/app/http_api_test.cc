@@ -80,7 +80,8 @@ TEST_F(HttpApiTest, LoopClosuresAreFilteredByMapRobotSourceAndCursor) {
   for (const char* robot : {"r1", "r2", "r3"}) store.upsertRobot({robot, "lab", "[]", 1, 1, 0});
   const auto add = [&](const std::string& map, LoopSource source, const std::string& q, const std::string& m,
                        int64_t stamp) {
-    LoopClosure c{map, source, {q, stamp, std::nullopt}, {m, stamp - 5, Eigen::Isometry3d::Identity()}, 0.75};
+    LoopClosure c{map, source, {q, stamp, std::nullopt}, {m, stamp - 5, Eigen::Isometry3d::Identity()}, 0.75,
+                  std::nullopt};
     c.query.pose = Eigen::Isometry3d(Eigen::Translation3d(1.0, 2.0, 0.5));
     return *store.appendLoopClosure(toRecord(c, 42));
   };

@@ -79,7 +79,7 @@ TEST(LoopClosureFeed, PostedClosuresReachTheSinkInOrderWithTheFrames) {
   for (int64_t i = 0; i < 3; ++i) feed.push(frame(FrameKind::kCamera, "r1", i, i == 2 ? 40 : 40 + i), true);
   // Posted after the frames (the queue bound is for frames only): delivered after their closure.
   for (int64_t i = 0; i < 3; ++i) {
-    feed.post({"lab", LoopSource::kGeometry, {"r2", 100 + i, std::nullopt}, {"r1", i, std::nullopt}, 0.5});
+    feed.post({"lab", LoopSource::kGeometry, {"r2", 100 + i, std::nullopt}, {"r1", i, std::nullopt}, 0.5, std::nullopt});
   }
   feed.drain();
   ASSERT_EQ(out.closures.size(), 4u);

@@ -25,7 +25,7 @@ class SameGreyRecognizer : public PlaceRecognizer {
     const double mean = cv::mean(gray)[0];
     means_.push_back(mean);
     for (size_t i = 0; i + 2 < means_.size(); ++i) {
-      if (means_[i] == mean) return Match{static_cast<int64_t>(i), mean / 255.0};
+      if (means_[i] == mean) return Match{static_cast<int64_t>(i), mean / 255.0, std::nullopt};
     }
     return std::nullopt;
   }
