@@ -3,6 +3,8 @@
 /// Place recognition of rmapd: server/loop's incremental bag-of-words loop
 /// detector (ORB, its fixed defaults) behind the PlaceRecognizer seam.
 
+#include <functional>
+
 #include "app/config.h"
 #include "app/place_recognizer.h"
 #include "loop/loop_detector.h"
@@ -11,13 +13,24 @@ namespace rmap::app {
 
 class BowRecognizer : public PlaceRecognizer {
  public:
-  explicit BowRecognizer(loop::LoopDetectorOptions options = {});
-  /// The detector's accepted candidate (score: its acceptance score, the verified inliers).
+  /// What the motion of a verified candidate's pixels (loop::LoopCandidate::reference_from_query_px)
+  /// means in metres, for metric images: the older place's sensor frame from the new one's.
+  using PixelMotionInMetres = std::function<Eigen::Isometry3d(const Eigen::Isometry2d& reference_from_query_px)>;
+
+  /// @param pixel_motion  empty: the pixels' motion measures nothing (camera images)
+  /// @param measured_pose_tolerance  PlaceRecognizer::measuredPoseTolerance
+  explicit BowRecognizer(loop::LoopDetectorOptions options = {}, PixelMotionInMetres pixel_motion = {},
+                         std::optional<PoseTolerance> measured_pose_tolerance = std::nullopt);
+  /// The detector's accepted candidate (score: its acceptance score, the verified inliers), with
+  /// the measured relative pose of a 3D fit, or of a 2D fit through pixel_motion.
   /// Each robot is a stream of the detector.
   std::optional<Match> addFrame(const PlaceImage& image, const std::string& robot_id) override;
+  std::optional<PoseTolerance> measuredPoseTolerance() const override { return measured_pose_tolerance_; }
 
  private:
   loop::LoopDetector detector_;
+  PixelMotionInMetres pixel_motion_;
+  std::optional<PoseTolerance> measured_pose_tolerance_;
 };
 
 /// A BowRecognizer for each kind of frame the config turns on.

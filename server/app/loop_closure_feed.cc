@@ -3,6 +3,7 @@
 #include <spdlog/spdlog.h>
 
 #include <chrono>
+#include <cmath>
 #include <stdexcept>
 
 namespace rmap::app {
@@ -108,8 +109,23 @@ void LoopClosureFeed::process(Frame& frame) {
                   match->reference_frame, source.places.size());
     return;
   }
-  deliver({map_, sourceOf(frame.kind), source.places.back(), source.places[reference], match->score,
-           match->reference_from_query});
+  const LoopPlace &query = source.places.back(), &older = source.places[reference];
+  const std::optional<PoseTolerance> tolerance = source.recognizer->measuredPoseTolerance();
+  if (tolerance && match->reference_from_query && query.pose && older.pose) {
+    const Eigen::Isometry3d disagreement =
+        (older.pose->inverse() * *query.pose).inverse() * *match->reference_from_query;
+    const double off_m = disagreement.translation().norm();
+    const double off_rad = Eigen::AngleAxisd(disagreement.linear()).angle();
+    if (off_m > tolerance->translation_m || off_rad > tolerance->rotation_rad) {
+      metrics_.loop_closures_refused.fetch_add(1, std::memory_order_relaxed);
+      spdlog::info("map {}: {} closure of {} at {} ns with {} at {} ns refused: its measured relative pose lies "
+                   "{:.2f} m and {:.1f}° from the places' poses",
+                   map_, toString(sourceOf(frame.kind)), query.robot_id, query.stamp_ns, older.robot_id,
+                   older.stamp_ns, off_m, off_rad * 180.0 / M_PI);
+      return;
+    }
+  }
+  deliver({map_, sourceOf(frame.kind), query, older, match->score, match->reference_from_query});
 }
 
 void LoopClosureFeed::deliver(const LoopClosure& closure) {

@@ -39,7 +39,7 @@ struct LoopClosure {
   double score = 0;  ///< the detector's acceptance score (higher = surer; geometry: match score 0..1)
   /// The query place's sensor pose in the match place's sensor frame (metres), as the loop
   /// closure measured it (geometry: the scan-to-submap match; laser-intensity panoramas: the
-  /// 3D rigid fit); unknown otherwise.
+  /// 3D rigid fit; reflectivity patches: the 2D rigid fit of their pixels); unknown otherwise.
   std::optional<Eigen::Isometry3d> match_from_query;
 };
 

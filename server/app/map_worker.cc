@@ -49,14 +49,6 @@ store::TrajectoryPose toTrajectoryPose(const RobotPose& p) {
   return t;
 }
 
-/// A planar pose in 3D, on the map's z = 0 plane.
-Eigen::Isometry3d planarIsometry(const slam2d::Pose2& p, double z_m) {
-  Eigen::Isometry3d out = Eigen::Isometry3d::Identity();
-  out.linear() = Eigen::AngleAxisd(p.theta_rad, Eigen::Vector3d::UnitZ()).toRotationMatrix();
-  out.translation() = Eigen::Vector3d(p.x_m, p.y_m, z_m);
-  return out;
-}
-
 /// Writes `blocks` into `map` a slice at a time: replaceBlocks holds every block it writes
 /// expanded (16.9 KB) until it fuses them, so one call for a whole import would need that per block.
 void replaceBlocksInSlices(map3d::CuboidMap& map, const map3d::MapBlocks& blocks) {
@@ -327,7 +319,7 @@ void MapWorker::feedCloud(int64_t log_id, const v1::RobotMessage& message, const
 void MapWorker::feedPatch(int64_t log_id, const std::string& robot_id, int64_t stamp_ns,
                           const slam2d::Pose2& base_pose, bool live) {
   if (!loop_feed_->accepts(FrameKind::kReflectivityPatch)) return;
-  LoopPlace place{robot_id, stamp_ns, planarIsometry(base_pose, 0.0)};
+  LoopPlace place{robot_id, stamp_ns, slam2d::planarIsometry(base_pose)};
   if (!newPlace(FrameKind::kReflectivityPatch, place)) return;
   noteLoopInput(log_id);
   // Rendered now: the 2D map changes with the next scans.
@@ -365,9 +357,9 @@ void MapWorker::applyScan(int64_t log_id, const v1::RobotMessage& message, const
   planar_scans_[robot_id].push_back(planar);
   // Stored by the feed's thread: a durable write per closure would hold this worker's acks back.
   for (const slam2d::LoopClosure2d& c : result->closures) {
-    loop_feed_->post({name_, LoopSource::kGeometry, {c.query_trajectory, c.query_stamp_ns, planarIsometry(c.query_pose, 0.0)},
-                      {c.match_trajectory, c.match_stamp_ns, planarIsometry(c.match_pose, 0.0)}, c.score,
-                      planarIsometry(c.relative, 0.0)});
+    loop_feed_->post({name_, LoopSource::kGeometry, {c.query_trajectory, c.query_stamp_ns, slam2d::planarIsometry(c.query_pose)},
+                      {c.match_trajectory, c.match_stamp_ns, slam2d::planarIsometry(c.match_pose)}, c.score,
+                      slam2d::planarIsometry(c.relative)});
   }
   if (!in_map3d) {
     if (planar.in_map3d) {
@@ -377,7 +369,7 @@ void MapWorker::applyScan(int64_t log_id, const v1::RobotMessage& message, const
       const map3d::ScanStats stats = map_->insertScan(origin, points, options);
       metrics_.points_integrated.fetch_add(stats.points - stats.rejected_points, std::memory_order_relaxed);
     }
-    const RobotPose pose{robot_id, name_, message.seq(), scan.stamp_ns(), planarIsometry(result->base_pose, 0.0)};
+    const RobotPose pose{robot_id, name_, message.seq(), scan.stamp_ns(), slam2d::planarIsometry(result->base_pose)};
     pending_poses_.emplace_back(robot_id, toTrajectoryPose(pose));
     publishPose(pose);
     if (live && estimate_sink_) {
@@ -425,12 +417,12 @@ void MapWorker::applyCorrection(bool in_map3d) {
       }
       s.base_pose = p;
       if (!in_map3d) {
-        pending_poses_.emplace_back(robot, toTrajectoryPose({robot, name_, s.seq, s.stamp_ns, planarIsometry(p, 0.0)}));
+        pending_poses_.emplace_back(robot, toTrajectoryPose({robot, name_, s.seq, s.stamp_ns, slam2d::planarIsometry(p)}));
       }
     }
     if (!in_map3d && !scans.empty()) {
       const PlanarScan& last = scans.back();
-      publishPose({robot, name_, last.seq, last.stamp_ns, planarIsometry(last.base_pose, 0.0)});
+      publishPose({robot, name_, last.seq, last.stamp_ns, slam2d::planarIsometry(last.base_pose)});
     }
   }
   // Below the 3D snapshot the snapshot holds the planar rows as later scans left them.

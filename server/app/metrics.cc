@@ -104,6 +104,9 @@ std::string renderPrometheus(const Metrics& m, const MetricsGauges& g) {
   metric(out, "rmap_loop_frames_dropped_total", "counter",
          "Live frames skipped because place recognition was behind (acks never wait for it).",
          load(m.loop_frames_dropped));
+  metric(out, "rmap_loop_closures_refused_total", "counter",
+         "Place matches refused: their measured relative pose contradicts the places' poses.",
+         load(m.loop_closures_refused));
   metric(out, "rmap_trajectory_corrections_total", "counter",
          "2D pose graph optimisations applied to trajectories and maps.", load(m.trajectory_corrections));
   metric(out, "rmap_robot_connections", "gauge", "Open robot streams.", g.robot_connections);

@@ -51,6 +51,8 @@ struct Metrics {
   std::atomic<uint64_t> loop_frames{0};          ///< frames put through a place recognizer (replayed ones included)
   std::atomic<uint64_t> loop_frames_refused{0};  ///< frames that could not be made into a grey image
   std::atomic<uint64_t> loop_frames_dropped{0};  ///< live frames dropped because place recognition was behind
+  /// matches refused because their measured relative pose contradicts the places' poses
+  std::atomic<uint64_t> loop_closures_refused{0};
   std::atomic<uint64_t> trajectory_corrections{0};  ///< 2D pose graph optimisations applied to trajectories and maps
   LatencyHistogram ack_latency;      ///< frame received → ack queued
   LatencyHistogram apply_latency;    ///< one message applied to its map

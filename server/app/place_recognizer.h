@@ -33,6 +33,12 @@ inline LoopSource sourceOf(FrameKind kind) {
 
 using loop::PlaceImage;
 
+/// How far a measured relative pose may lie from the one between two places' poses.
+struct PoseTolerance {
+  double translation_m = 0.0;
+  double rotation_rad = 0.0;
+};
+
 class PlaceRecognizer {
  public:
   struct Match {
@@ -47,6 +53,10 @@ class PlaceRecognizer {
   /// @return the older frame it closes a loop with, when the engine accepts one
   /// @throws std::invalid_argument for an image the engine cannot use (state unchanged)
   virtual std::optional<Match> addFrame(const PlaceImage& image, const std::string& robot_id) = 0;
+  /// For frames whose places' poses all come from one consistent estimate (the map's own 2D
+  /// SLAM): how far a true match's measured relative pose can lie from the one between the two
+  /// places' poses (the drift that estimate can hold). A match beyond it is refused. None: not checked.
+  virtual std::optional<PoseTolerance> measuredPoseTolerance() const { return std::nullopt; }
 };
 
 /// Makes the recognizer of a kind of frame, or nullptr when that kind is off.

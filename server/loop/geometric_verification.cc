@@ -1,6 +1,8 @@
 #include "loop/geometric_verification.h"
 
 #include <Eigen/Geometry>
+#include <Eigen/SVD>
+#include <algorithm>
 #include <cmath>
 #include <opencv2/calib3d.hpp>
 #include <random>
@@ -50,8 +52,36 @@ Eigen::Isometry3d rigidFit(const Eigen::Matrix3Xd& from, const Eigen::Matrix3Xd&
   return t;
 }
 
-}  // namespace
+/// Rigid motion (no scale) taking the masked points of `from` onto those of `to`, least squares:
+/// in 2D the angle is that of the summed cross and dot products of the centred pairs (Eigen's
+/// umeyama does the same, but its fixed-size 2D code trips gcc 12's -Wstringop-overread).
+Eigen::Isometry2d rigidFit2d(const std::vector<cv::Point2f>& from, const std::vector<cv::Point2f>& to,
+                             const std::vector<uchar>& mask) {
+  Eigen::Vector2d from_mean = Eigen::Vector2d::Zero(), to_mean = Eigen::Vector2d::Zero();
+  double n = 0.0;
+  for (size_t k = 0; k < from.size(); ++k) {
+    if (!mask[k]) continue;
+    from_mean += Eigen::Vector2d(from[k].x, from[k].y);
+    to_mean += Eigen::Vector2d(to[k].x, to[k].y);
+    ++n;
+  }
+  from_mean /= n;
+  to_mean /= n;
+  double dot = 0.0, cross = 0.0;
+  for (size_t k = 0; k < from.size(); ++k) {
+    if (!mask[k]) continue;
+    const Eigen::Vector2d a = Eigen::Vector2d(from[k].x, from[k].y) - from_mean;
+    const Eigen::Vector2d b = Eigen::Vector2d(to[k].x, to[k].y) - to_mean;
+    dot += a.dot(b);
+    cross += a.x() * b.y() - a.y() * b.x();
+  }
+  Eigen::Isometry2d fit = Eigen::Isometry2d::Identity();
+  fit.linear() = Eigen::Rotation2Dd(std::atan2(cross, dot)).toRotationMatrix();
+  fit.translation() = to_mean - fit.linear() * from_mean;
+  return fit;
+}
 
+}  // namespace
 
 Verification verifyGeometry(const std::vector<cv::Point2f>& query_points, const cv::Mat& query_descriptors,
                             const std::vector<cv::Point2f>& reference_points, const cv::Mat& reference_descriptors,
@@ -74,6 +104,8 @@ Verification verifyGeometry(const std::vector<cv::Point2f>& query_points, const 
     // [s·cos, −s·sin, tx; s·sin, s·cos, ty]
     const double scale = std::hypot(m.at<double>(0, 0), m.at<double>(1, 0));
     if (std::abs(scale - 1.0) > options.max_scale_error) return v;
+    // The motion without the scale: the pixels are metric, the same size at both visits.
+    v.reference_from_query_px = rigidFit2d(q, r, mask);
   } else {
     const cv::Mat f = cv::findFundamentalMat(q, r, cv::FM_RANSAC, options.ransac_threshold_px,
                                              options.ransac_confidence, options.ransac_iterations, mask);
@@ -125,6 +157,12 @@ Verification verifyRigid3d(const std::vector<Eigen::Vector3f>& query_points_m, c
       keeps_sides = std::abs(side_q - side_r) <= tolerance_m(i) + tolerance_m(j) && side_r > tolerance_m(i);
     }
     if (!keeps_sides) continue;
+    // Three points on a line leave the turn about it free: the sample must span a triangle.
+    const Eigen::Vector3d ab = r.col(s[1]) - r.col(s[0]), ac = r.col(s[2]) - r.col(s[0]), bc = ac - ab;
+    const double longest_side = std::max({ab.norm(), ac.norm(), bc.norm()});
+    if (ab.cross(ac).norm() / longest_side <= std::max({tolerance_m(s[0]), tolerance_m(s[1]), tolerance_m(s[2])})) {
+      continue;
+    }
     Eigen::Matrix3d from, to;
     for (int a = 0; a < 3; ++a) {
       from.col(a) = q.col(s[a]);
@@ -150,6 +188,11 @@ Verification verifyRigid3d(const std::vector<Eigen::Vector3f>& query_points_m, c
     from.col(k) = q.col(members[k]);
     to.col(k) = r.col(members[k]);
   }
+  // Inliers along one line (a wall's edge, one ring on a far wall) measure no turn about that
+  // line, whatever their number: the fit could be that line's mirror image (seen: 180° off).
+  const Eigen::Matrix3Xd centred = to.colwise() - to.rowwise().mean();
+  const Eigen::Vector3d spread = Eigen::JacobiSVD<Eigen::Matrix3Xd>(centred).singularValues();
+  if (spread(1) / std::sqrt(static_cast<double>(members.size())) <= options.ransac_threshold_m) return v;
   const Eigen::Isometry3d refined = rigidFit(from, to);
   if (const int count = inliersOf(refined, nullptr); count >= best) {
     best = count;

@@ -3,14 +3,15 @@
 /// Checks that two images see the same rigid scene: putative matches of
 /// their binary descriptors (mutual nearest neighbours passing a ratio
 /// test), then a model fitted by RANSAC (OpenCV); the inliers are the
-/// evidence. Two models:
+/// evidence. Three models:
 ///  - a fundamental matrix (camera images, intensity panoramas): it needs no
 ///    calibration, so it holds for any pinhole camera; a panorama patch is
 ///    near-pinhole locally;
 ///  - a 2D rigid motion (metric top-down images such as reflectivity
 ///    patches: the same place seen again is the same picture turned and
 ///    shifted, at the same scale): a rotation, a shift and a scale fitted by
-///    RANSAC, and no inlier unless the scale is 1 within max_scale_error. Its
+///    RANSAC, and no inlier unless the scale is 1 within max_scale_error (the
+///    motion, refitted without scale, measures the revisit's offset). Its
 ///    2 degrees of freedom fewer than the fundamental matrix's 7 leave
 ///    look-alike structure at another scale or with another layout nothing
 ///    to fit;
@@ -20,9 +21,12 @@
 ///    (Umeyama, Eigen). Six degrees of freedom in metres: a look-alike place
 ///    elsewhere (another storey, a repeated corridor) must also repeat its
 ///    3D layout around the sensor, which a fundamental matrix never asks.
+///    Samples and inlier sets along one line are refused: they leave the turn
+///    about that line free (a fit can come out 180° off).
 
 #include <Eigen/Geometry>
 #include <opencv2/core.hpp>
+#include <optional>
 #include <vector>
 
 namespace rmap::loop {
@@ -56,6 +60,9 @@ struct Verification {
   int inliers = 0;  ///< RANSAC inliers of the model (0 when too few matches, or a rigid fit's scale is off)
   /// verifyRigid3d with inliers: the fitted motion, reference sensor frame from query sensor frame.
   Eigen::Isometry3d reference_from_query = Eigen::Isometry3d::Identity();
+  /// kRigid2d with inliers: the rigid motion (scale 1, refitted on the inliers) taking query
+  /// pixels onto reference pixels (x = column, y = row).
+  std::optional<Eigen::Isometry2d> reference_from_query_px;
 };
 
 /// @param query_points, reference_points  keypoint positions (pixels) of each descriptor row

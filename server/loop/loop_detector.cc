@@ -160,8 +160,9 @@ FrameResult LoopDetector::addFeatures(const Features& features, std::vector<Eige
                                   options_.verification)
                   : verifyGeometry(stored.points, stored.descriptors, ref.points, ref.descriptors, options_.verification);
       if (!best || v.inliers > best->inliers) {
-        best = LoopCandidate{frame, m.frame, 0.0, v.inliers, v.matches, m.score, std::nullopt};
+        best = LoopCandidate{frame, m.frame, 0.0, v.inliers, v.matches, m.score, std::nullopt, std::nullopt};
         if (rigid3d && v.inliers > 0) best->reference_from_query = v.reference_from_query;
+        if (v.inliers > 0) best->reference_from_query_px = v.reference_from_query_px;
       }
     }
   }

@@ -114,6 +114,8 @@ struct LoopCandidate {
   double similarity = 0.0;       ///< tf-idf similarity of the two frames (InvertedIndex), 0..1
   /// kRigid3d: the fitted motion, reference sensor frame from query sensor frame (metres).
   std::optional<Eigen::Isometry3d> reference_from_query;
+  /// kRigid2d: the fitted motion of the pixels, query image onto reference image (Verification).
+  std::optional<Eigen::Isometry2d> reference_from_query_px;
 };
 
 struct FrameResult {

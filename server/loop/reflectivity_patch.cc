@@ -38,4 +38,17 @@ cv::Mat reflectivityPatch(const slam2d::GridMap2d& map, const slam2d::Pose2& cen
   return patch;
 }
 
+slam2d::Pose2 patchMotion(const Eigen::Isometry2d& reference_from_query_px, const PatchOptions& options) {
+  options.validate();
+  // Pixel (x, y) shows robot-frame point ((N/2 − ½ − y)·pixel_m, (N/2 − ½ − x)·pixel_m): a
+  // reflection and a scale, the same in both patches, so the robots moved by the pixels' motion
+  // seen through it (the reflection turns the pixels' rotation the other way).
+  const double centre_m = (0.5 * options.size_px - 0.5) * options.pixel_m;
+  Eigen::Affine2d robot_from_px = Eigen::Affine2d::Identity();
+  robot_from_px.linear() << 0.0, -options.pixel_m, -options.pixel_m, 0.0;
+  robot_from_px.translation() = Eigen::Vector2d(centre_m, centre_m);
+  const Eigen::Affine2d motion = robot_from_px * reference_from_query_px * robot_from_px.inverse();
+  return {motion.translation().x(), motion.translation().y(), std::atan2(motion.linear()(1, 0), motion.linear()(0, 0))};
+}
+
 }  // namespace rmap::loop

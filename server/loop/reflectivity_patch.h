@@ -13,6 +13,7 @@
 /// The occupancy outline alone carries structure; the reflectivity makes
 /// look-alike corridors differ (posters, tape, doors).
 
+#include <Eigen/Geometry>
 #include <opencv2/core.hpp>
 
 #include "slam2d/grid_map.h"
@@ -33,5 +34,12 @@ struct PatchOptions {
 /// Renders the patch (8-bit, single channel, size_px × size_px). O(size_px²).
 /// @throws std::invalid_argument for bad options or a non-finite pose
 cv::Mat reflectivityPatch(const slam2d::GridMap2d& map, const slam2d::Pose2& center, const PatchOptions& options);
+
+/// The motion between the centre poses of two patches, from the motion of their pixels.
+/// @param reference_from_query_px  rigid motion taking the query patch's pixels (x = column,
+///        y = row; pixel centres at integers) onto the reference patch's pixels
+/// @return the query patch's centre pose in the reference patch's centre frame (m, rad)
+/// @throws std::invalid_argument for bad options
+slam2d::Pose2 patchMotion(const Eigen::Isometry2d& reference_from_query_px, const PatchOptions& options);
 
 }  // namespace rmap::loop

@@ -27,4 +27,11 @@ Pose2 Pose2::inverse() const {
 
 Pose2 between(const Pose2& a, const Pose2& b) { return a.inverse() * b; }
 
+Eigen::Isometry3d planarIsometry(const Pose2& p, double z_m) {
+  Eigen::Isometry3d out = Eigen::Isometry3d::Identity();
+  out.linear() = Eigen::AngleAxisd(p.theta_rad, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  out.translation() = Eigen::Vector3d(p.x_m, p.y_m, z_m);
+  return out;
+}
+
 }  // namespace rmap::slam2d

@@ -4,6 +4,7 @@
 /// with the composition rules every part of 2D SLAM and its scoring shares.
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <cmath>
 
 namespace rmap::slam2d {
@@ -27,5 +28,8 @@ struct Pose2 {
 
 /// The motion from a to b in a's frame: a⁻¹ ⊕ b.
 Pose2 between(const Pose2& a, const Pose2& b);
+
+/// The planar pose in 3D: turned about z, at height z_m (metres).
+Eigen::Isometry3d planarIsometry(const Pose2& p, double z_m = 0.0);
 
 }  // namespace rmap::slam2d

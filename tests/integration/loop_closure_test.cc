@@ -191,7 +191,9 @@ TEST(LoopClosure, TwoRobotsCrossingOnOneMapCloseALoopAndTheirTrajectoriesAreCorr
   for (const nlohmann::json& c : closures) {
     const std::string source = c["source"];
     ++by_source[source];
-    if (source == "geometry") EXPECT_TRUE(c["relative_pose"].is_object()) << c;
+    if (source == "geometry") {
+      EXPECT_TRUE(c["relative_pose"].is_object()) << c;
+    }
     if (c["relative_pose"].is_object()) {
       if (const auto q = truthOf(c["query"]), m = truthOf(c["match"]); q && m) {
         ++measured[source];
@@ -225,8 +227,10 @@ TEST(LoopClosure, TwoRobotsCrossingOnOneMapCloseALoopAndTheirTrajectoriesAreCorr
               "truth, %d false)\n",
               closures.size(), by_source["geometry"], far_apart["geometry"], by_source["laser_intensity"],
               far_apart["laser_intensity"], judged, wrong);
-  std::printf("[ relative poses ] judged by the truth: geometry %d, laser_intensity %d; worst %.3f m, %.2f°\n",
-              measured["geometry"], measured["laser_intensity"], worst_m, worst_rad * 180.0 / M_PI);
+  std::printf("[ relative poses ] judged by the truth: geometry %d, laser_intensity %d; worst %.3f m, %.2f°; %.0f "
+              "matches refused for contradicting the poses\n",
+              measured["geometry"], measured["laser_intensity"], worst_m, worst_rad * 180.0 / M_PI,
+              metricValue(http.get("/metrics").body, "rmap_loop_closures_refused_total"));
   EXPECT_GT(measured["geometry"], 0);
   EXPECT_EQ(far_apart["geometry"], 0);
   EXPECT_EQ(wrong, 0);

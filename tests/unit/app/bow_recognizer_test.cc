@@ -5,6 +5,8 @@
 #include <cmath>
 #include <opencv2/imgproc.hpp>
 
+#include "slam2d/loop_closure.h"
+
 namespace rmap::app {
 namespace {
 
@@ -71,6 +73,33 @@ TEST(BowRecognizer, PanoramasAreVerifiedInMetresAndTheMatchCarriesTheMeasuredPos
   // The new sensor pose in the old sensor frame: 0.4 m forward.
   EXPECT_NEAR(match->reference_from_query->translation().x(), 0.4, 0.05);
   EXPECT_NEAR(match->reference_from_query->translation().y(), 0.0, 0.05);
+}
+
+TEST(BowRecognizer, PatchClosuresCarryTheRobotsMotionBetweenThePatchCentres) {
+  const std::unique_ptr<PlaceRecognizer> patches = bowRecognizers(LoopClosureConfig{})(FrameKind::kReflectivityPatch);
+  ASSERT_NE(patches, nullptr);
+  // Patches as rmapd cuts them (160 × 160 px of 5 cm); each place its own.
+  const auto patch = [](int seed) { return texture(seed)(cv::Rect(0, 0, 160, 160)).clone(); };
+  constexpr int kPlaces = 60;
+  for (int i = 0; i < kPlaces; ++i) EXPECT_FALSE(patches->addFrame(patch(i), "r1"));
+  // Back at places 0, 1, 2, … 0.5 m to the left: the patch's content lies 10 columns further right.
+  std::optional<PlaceRecognizer::Match> match;
+  for (int i = 0; i < 5 && !match; ++i) {
+    cv::Mat moved;
+    cv::warpAffine(patch(i), moved, cv::Matx23d(1, 0, 10, 0, 1, 0), cv::Size(160, 160));
+    match = patches->addFrame(moved, "r1");
+  }
+  ASSERT_TRUE(match);
+  ASSERT_TRUE(match->reference_from_query);
+  EXPECT_NEAR(match->reference_from_query->translation().x(), 0.0, 0.03);
+  EXPECT_NEAR(match->reference_from_query->translation().y(), 0.5, 0.03);
+  EXPECT_LT(Eigen::AngleAxisd(match->reference_from_query->linear()).angle(), 0.01);
+  // Patches are cut around the 2D SLAM's poses: a measured pose must agree with them within the
+  // SLAM's widest loop search. Panoramas' poses are the robots' own: not checked.
+  ASSERT_TRUE(patches->measuredPoseTolerance());
+  EXPECT_EQ(patches->measuredPoseTolerance()->translation_m, slam2d::LoopClosureOptions{}.max_window_m);
+  EXPECT_EQ(patches->measuredPoseTolerance()->rotation_rad, slam2d::LoopClosureOptions{}.max_window_rad);
+  EXPECT_FALSE(bowRecognizers(LoopClosureConfig{})(FrameKind::kIntensityPanorama)->measuredPoseTolerance());
 }
 
 }  // namespace

@@ -71,6 +71,37 @@ TEST(LoopClosureFeed, AcceptedMatchesBecomeClosuresBetweenTheFramesPlaces) {
   EXPECT_EQ(metrics.loop_frames_refused.load(), 1u);
 }
 
+/// SameGreyRecognizer measuring every match's query 2 m ahead (x) of the older frame, and
+/// refusing what lies more than 0.5 m or 0.1 rad from the places' poses.
+class MeasuringRecognizer : public SameGreyRecognizer {
+ public:
+  std::optional<Match> addFrame(const PlaceImage& image, const std::string& robot_id) override {
+    std::optional<Match> match = SameGreyRecognizer::addFrame(image, robot_id);
+    if (match) match->reference_from_query = Eigen::Isometry3d(Eigen::Translation3d(2.0, 0.0, 0.0));
+    return match;
+  }
+  std::optional<PoseTolerance> measuredPoseTolerance() const override { return PoseTolerance{0.5, 0.1}; }
+};
+
+TEST(LoopClosureFeed, AMatchWhoseMeasuredPoseContradictsThePlacesPosesIsRefused) {
+  Metrics metrics;
+  Collected out;
+  LoopClosureFeed feed(
+      "lab", [](FrameKind) { return std::make_unique<MeasuringRecognizer>(); }, out.sink(), metrics, 4);
+  // frame() puts the place at x = stamp (m): stamp 3 lies 2 m ahead of stamp 1, as measured;
+  // stamp 7, 6 m ahead, does not.
+  for (const auto& [stamp, grey] : {std::pair{1, 100}, {2, 50}, {3, 100}, {4, 60}, {7, 100}}) {
+    feed.push(frame(FrameKind::kReflectivityPatch, "r1", stamp, static_cast<uint8_t>(grey)), true);
+  }
+  feed.drain();
+  ASSERT_EQ(out.closures.size(), 1u);
+  EXPECT_EQ(out.closures[0].query.stamp_ns, 3);
+  EXPECT_EQ(out.closures[0].match.stamp_ns, 1);
+  ASSERT_TRUE(out.closures[0].match_from_query);
+  EXPECT_EQ(out.closures[0].match_from_query->translation().x(), 2.0);
+  EXPECT_EQ(metrics.loop_closures_refused.load(), 1u);
+}
+
 TEST(LoopClosureFeed, PostedClosuresReachTheSinkInOrderWithTheFrames) {
   Metrics metrics;
   Collected out;

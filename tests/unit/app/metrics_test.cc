@@ -143,6 +143,7 @@ TEST(RenderPrometheus, LoopClosuresAreCountedBySource) {
   EXPECT_TRUE(hasLine(out, "rmap_loop_closures_total{source=\"camera\"} 1")) << out;
   EXPECT_TRUE(hasLine(out, "rmap_loop_closures_total{source=\"laser_intensity\"} 0")) << out;
   EXPECT_TRUE(hasLine(out, "rmap_loop_closures_total{source=\"geometry\"} 3")) << out;
+  EXPECT_TRUE(hasLine(out, "rmap_loop_closures_refused_total 0")) << out;
 }
 
 TEST(RenderPrometheus, EveryMetricHasOneHelpAndOneTypeLine) {
@@ -151,7 +152,7 @@ TEST(RenderPrometheus, EveryMetricHasOneHelpAndOneTypeLine) {
   for (size_t at = out.find("# HELP "); at != std::string::npos; at = out.find("# HELP ", at + 1)) ++help;
   for (size_t at = out.find("# TYPE "); at != std::string::npos; at = out.find("# TYPE ", at + 1)) ++type;
   EXPECT_EQ(help, type);
-  EXPECT_EQ(help, 23u + 15u + 7u);  // counters, gauges, histograms
+  EXPECT_EQ(help, 24u + 15u + 7u);  // counters, gauges, histograms
 }
 
 }  // namespace

@@ -18,12 +18,16 @@ std::vector<cv::Point2f> points(const Features& f) {
   return p;
 }
 
-TEST(GeometricVerification, SameSceneHasManyInliersAndAnotherSceneFew) {
-  auto ex = makeExtractor();
+/// ORB features of a textured scene and of the same scene shifted by (6, −3) px.
+std::pair<Features, Features> sceneAndShifted() {
+  auto extractor = makeExtractor();
   const cv::Mat scene = test::texturedScene(11);
-  const Features a = ex->extract(scene);
-  const Features moved = ex->extract(test::shifted(scene, 6.0, -3.0));
-  const Features other = ex->extract(test::texturedScene(12));
+  return {extractor->extract(scene), extractor->extract(test::shifted(scene, 6.0, -3.0))};
+}
+
+TEST(GeometricVerification, SameSceneHasManyInliersAndAnotherSceneFew) {
+  const auto [a, moved] = sceneAndShifted();
+  const Features other = makeExtractor()->extract(test::texturedScene(12));
   const GeometricVerificationOptions o;
   const Verification same = verifyGeometry(points(a), a.descriptors, points(moved), moved.descriptors, o);
   const Verification different = verifyGeometry(points(a), a.descriptors, points(other), other.descriptors, o);
@@ -50,6 +54,15 @@ TEST(GeometricVerification, ARigidFitTakesATurnedPictureButNotARescaledOne) {
   rigid.model = GeometricModel::kRigid2d;
   const Verification same = verifyGeometry(points(a), a.descriptors, points(turned_view), turned_view.descriptors, rigid);
   EXPECT_GT(same.inliers, 50);
+  // The fitted motion is the picture's: shifted by (6, −3) px, then turned 25° about the centre.
+  ASSERT_TRUE(same.reference_from_query_px);
+  const cv::Mat turn = cv::getRotationMatrix2D(cv::Point2f(scene.cols / 2.0f, scene.rows / 2.0f), 25.0, 1.0);
+  for (const cv::Point2d p : {cv::Point2d(20, 30), cv::Point2d(300, 200), cv::Point2d(160, 120)}) {
+    const cv::Point2d shifted = p + cv::Point2d(6, -3);
+    const Eigen::Vector2d truth(turn.at<double>(0, 0) * shifted.x + turn.at<double>(0, 1) * shifted.y + turn.at<double>(0, 2),
+                                turn.at<double>(1, 0) * shifted.x + turn.at<double>(1, 1) * shifted.y + turn.at<double>(1, 2));
+    EXPECT_LT((*same.reference_from_query_px * Eigen::Vector2d(p.x, p.y) - truth).norm(), 1.0);
+  }
   // A zoom fits a fundamental matrix (it sees one plane) but is no rigid motion.
   const GeometricVerificationOptions fundamental;
   EXPECT_GT(verifyGeometry(points(a), a.descriptors, points(zoomed_view), zoomed_view.descriptors, fundamental).inliers,
@@ -58,6 +71,7 @@ TEST(GeometricVerification, ARigidFitTakesATurnedPictureButNotARescaledOne) {
       verifyGeometry(points(a), a.descriptors, points(zoomed_view), zoomed_view.descriptors, rigid);
   EXPECT_GE(zoomed.matches, 15);
   EXPECT_EQ(zoomed.inliers, 0);
+  EXPECT_FALSE(zoomed.reference_from_query_px);
   GeometricVerificationOptions bad = rigid;
   bad.max_scale_error = 1.0;
   EXPECT_THROW(bad.validate(), std::invalid_argument);
@@ -72,20 +86,13 @@ std::vector<Eigen::Vector3f> roomPoints(size_t n, uint32_t seed) {
   return p;
 }
 
-TEST(GeometricVerification, ARigid3dFitRecoversTheMotionOfLiftedKeypointsAndNotAnotherLayout) {
-  auto ex = makeExtractor();
-  const cv::Mat scene = test::texturedScene(11);
-  const Features a = ex->extract(scene);
-  const Features moved = ex->extract(test::shifted(scene, 6.0, -3.0));
-  const std::vector<Eigen::Vector3f> query = roomPoints(a.keypoints.size(), 1);
-  // The reference sees the same points from a pose 1.2 m away and turned 30°: each matched
-  // keypoint's point is the query's, moved; 2 cm of noise.
-  Eigen::Isometry3d truth = Eigen::Isometry3d::Identity();
-  truth.linear() = Eigen::AngleAxisd(0.52, Eigen::Vector3d::UnitZ()).toRotationMatrix();
-  truth.translation() = Eigen::Vector3d(1.0, -0.6, 0.2);
+/// The points a sensor at `truth` (reference from query) sees of `query` (one per keypoint of
+/// `a`) at the keypoints of `moved`, the picture of `a` shifted by (6, −3) px; 2 cm of noise.
+std::vector<Eigen::Vector3f> movedPoints(const Features& a, const Features& moved,
+                                         const std::vector<Eigen::Vector3f>& query, const Eigen::Isometry3d& truth) {
   std::mt19937 rng(3);
   std::normal_distribution<float> noise(0.0f, 0.02f);
-  // Keypoints of the shifted image: the same scene point as the nearest keypoint of `a` 6, −3 px back.
+  // Each keypoint of the shifted image shows the point of the nearest keypoint of `a` 6, −3 px back.
   std::vector<Eigen::Vector3f> reference;
   for (const cv::KeyPoint& k : moved.keypoints) {
     size_t best = 0;
@@ -94,6 +101,22 @@ TEST(GeometricVerification, ARigid3dFitRecoversTheMotionOfLiftedKeypointsAndNotA
     }
     reference.push_back((truth.cast<float>() * query[best]) + Eigen::Vector3f(noise(rng), noise(rng), noise(rng)));
   }
+  return reference;
+}
+
+/// The reference sensor 1.2 m from the query's and turned 30°.
+Eigen::Isometry3d referenceFromQuery() {
+  Eigen::Isometry3d truth = Eigen::Isometry3d::Identity();
+  truth.linear() = Eigen::AngleAxisd(0.52, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  truth.translation() = Eigen::Vector3d(1.0, -0.6, 0.2);
+  return truth;
+}
+
+TEST(GeometricVerification, ARigid3dFitRecoversTheMotionOfLiftedKeypointsAndNotAnotherLayout) {
+  const auto [a, moved] = sceneAndShifted();
+  const std::vector<Eigen::Vector3f> query = roomPoints(a.keypoints.size(), 1);
+  const Eigen::Isometry3d truth = referenceFromQuery();
+  const std::vector<Eigen::Vector3f> reference = movedPoints(a, moved, query, truth);
   GeometricVerificationOptions o;
   o.model = GeometricModel::kRigid3d;
   const Verification same = verifyRigid3d(query, a.descriptors, reference, moved.descriptors, o);
@@ -112,6 +135,21 @@ TEST(GeometricVerification, ARigid3dFitRecoversTheMotionOfLiftedKeypointsAndNotA
   GeometricVerificationOptions bad = o;
   bad.ransac_threshold_m = 0.0;
   EXPECT_THROW(bad.validate(), std::invalid_argument);
+}
+
+TEST(GeometricVerification, KeypointsAlongOneLineMeasureNoRigid3dMotion) {
+  const auto [a, moved] = sceneAndShifted();
+  // Every keypoint on one edge 3 m ahead (within 5 cm): a turn about it moves none of them.
+  std::mt19937 rng(4);
+  std::uniform_real_distribution<float> along(-5.0f, 5.0f), off(-0.05f, 0.05f);
+  std::vector<Eigen::Vector3f> query;
+  for (size_t k = 0; k < a.keypoints.size(); ++k) query.emplace_back(3.0f + off(rng), along(rng), off(rng));
+  GeometricVerificationOptions o;
+  o.model = GeometricModel::kRigid3d;
+  const Verification v =
+      verifyRigid3d(query, a.descriptors, movedPoints(a, moved, query, referenceFromQuery()), moved.descriptors, o);
+  EXPECT_GT(v.matches, 100);
+  EXPECT_EQ(v.inliers, 0);
 }
 
 TEST(GeometricVerification, TooFewMatchesGiveNoInliersAndBadInputThrows) {

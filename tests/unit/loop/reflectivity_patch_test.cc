@@ -3,9 +3,16 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <numbers>
+#include <random>
 #include <stdexcept>
 #include <vector>
+
+#include <opencv2/calib3d.hpp>
+
+#include "loop/binary_features.h"
+#include "loop/geometric_verification.h"
 
 namespace rmap::loop {
 namespace {
@@ -51,6 +58,85 @@ TEST(ReflectivityPatch, TurnsWithTheRobotHeading) {
   EXPECT_GT(cv::countNonZero(turned.colRange(85, 95)), 20);
 }
 
+/// Pixel (x = column, y = row) of the patch around `center` that shows map point `point_m`.
+Eigen::Vector2d pixelOf(const slam2d::Pose2& center, const Eigen::Vector2d& point_m, const PatchOptions& o) {
+  const Eigen::Vector2d robot = center.inverse() * point_m;
+  const double centre_px = 0.5 * o.size_px - 0.5;
+  return {centre_px - robot.y() / o.pixel_m, centre_px - robot.x() / o.pixel_m};
+}
+
+TEST(ReflectivityPatch, ThePixelsMotionGivesTheRobotsMotion) {
+  PatchOptions o;
+  const slam2d::Pose2 reference{0.3, -0.2, 0.4}, query{0.9, 0.3, 0.75};
+  std::vector<cv::Point2d> from, to;
+  for (const Eigen::Vector2d& point : {Eigen::Vector2d(1.0, 1.0), Eigen::Vector2d(-2.0, 0.5),
+                                       Eigen::Vector2d(0.5, -3.0), Eigen::Vector2d(2.5, 2.0)}) {
+    const Eigen::Vector2d q = pixelOf(query, point, o), r = pixelOf(reference, point, o);
+    from.emplace_back(q.x(), q.y());
+    to.emplace_back(r.x(), r.y());
+  }
+  // The pixels' motion fitted by OpenCV ([s·cos, −s·sin, tx; s·sin, s·cos, ty]; exact points: s = 1).
+  const cv::Mat fit = cv::estimateAffinePartial2D(from, to);
+  ASSERT_FALSE(fit.empty());
+  Eigen::Isometry2d pixels = Eigen::Isometry2d::Identity();
+  pixels.linear() << fit.at<double>(0, 0), fit.at<double>(0, 1), fit.at<double>(1, 0), fit.at<double>(1, 1);
+  pixels.translation() << fit.at<double>(0, 2), fit.at<double>(1, 2);
+  const slam2d::Pose2 motion = patchMotion(pixels, o);
+  const slam2d::Pose2 truth = slam2d::between(reference, query);
+  // OpenCV's fit refines to about 1e-7 px.
+  EXPECT_NEAR(motion.x_m, truth.x_m, 1e-5);
+  EXPECT_NEAR(motion.y_m, truth.y_m, 1e-5);
+  EXPECT_NEAR(motion.theta_rad, truth.theta_rad, 1e-6);
+}
+
+/// A 14 × 14 m map of wall segments 0.3–1.5 m long, each of its own reflectivity.
+slam2d::GridMap2d segmentsMap(uint32_t seed) {
+  slam2d::GridMap2d map(0.05, 1);
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> coordinate(-7.0, 7.0), heading(-std::numbers::pi, std::numbers::pi),
+      length(0.3, 1.5), reflectivity(0.0, 1.0);
+  slam2d::OccupancyUpdate update;
+  for (int s = 0; s < 160; ++s) {
+    const Eigen::Vector2d start(coordinate(rng), coordinate(rng));
+    const Eigen::Vector2d along = Eigen::Rotation2Dd(heading(rng)) * Eigen::Vector2d::UnitX();
+    const Eigen::Vector2d normal(-along.y(), along.x());
+    const double rho = reflectivity(rng), span_m = length(rng);
+    for (double t = 0.0; t <= span_m; t += 0.05) {
+      // Seen from 0.15 m off the wall: the short ray leaves the other segments alone.
+      const Eigen::Vector2d end = start + t * along;
+      const std::vector<slam2d::Ray> ray{{end, true}};
+      for (int k = 0; k < 5; ++k) map.insert(end + 0.15 * normal, ray, update, 10.0);
+      map.addReflectivity(end, static_cast<float>(rho));
+    }
+  }
+  return map;
+}
+
+TEST(ReflectivityPatch, TwoPatchesOfOnePlaceMeasureTheMotionBetweenTheirCentres) {
+  const slam2d::GridMap2d map = segmentsMap(5);
+  const PatchOptions o;
+  const slam2d::Pose2 reference{0.3, -0.2, 0.4}, query{0.9, 0.3, 0.75};
+  auto extractor = makeExtractor();
+  const Features r = extractor->extract(reflectivityPatch(map, reference, o));
+  const Features q = extractor->extract(reflectivityPatch(map, query, o));
+  std::vector<cv::Point2f> r_px, q_px;
+  for (const cv::KeyPoint& k : r.keypoints) r_px.push_back(k.pt);
+  for (const cv::KeyPoint& k : q.keypoints) q_px.push_back(k.pt);
+  GeometricVerificationOptions rigid;
+  rigid.model = GeometricModel::kRigid2d;
+  const Verification v = verifyGeometry(q_px, q.descriptors, r_px, r.descriptors, rigid);
+  EXPECT_GT(v.inliers, 30);
+  ASSERT_TRUE(v.reference_from_query_px);
+  const slam2d::Pose2 motion = patchMotion(*v.reference_from_query_px, o);
+  const slam2d::Pose2 truth = slam2d::between(reference, query);
+  std::printf("[ patch motion ] %d inliers; measured (%.3f, %.3f, %.2f°), truth (%.3f, %.3f, %.2f°)\n", v.inliers,
+              motion.x_m, motion.y_m, motion.theta_rad * 180 / std::numbers::pi, truth.x_m, truth.y_m,
+              truth.theta_rad * 180 / std::numbers::pi);
+  // Within a pixel (0.05 m) and a degree: nearest-cell rendering moves keypoints by up to a pixel.
+  EXPECT_LT(std::hypot(motion.x_m - truth.x_m, motion.y_m - truth.y_m), 0.05);
+  EXPECT_LT(std::abs(slam2d::normalizeAngle(motion.theta_rad - truth.theta_rad)), std::numbers::pi / 180);
+}
+
 TEST(ReflectivityPatch, BadInputThrows) {
   const slam2d::GridMap2d map = wallMap();
   PatchOptions o;
@@ -61,6 +147,8 @@ TEST(ReflectivityPatch, BadInputThrows) {
   EXPECT_THROW(reflectivityPatch(map, {}, o), std::invalid_argument);
   o = {};
   EXPECT_THROW(reflectivityPatch(map, {NAN, 0.0, 0.0}, o), std::invalid_argument);
+  o.pixel_m = -1.0;
+  EXPECT_THROW(patchMotion(Eigen::Isometry2d::Identity(), o), std::invalid_argument);
 }
 
 }  // namespace
