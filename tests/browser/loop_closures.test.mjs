@@ -1,7 +1,7 @@
 // Loop closures in the web viewer: two simulated 2D-laser robots (rmap-sim) map one building
-// and rmapd finds loop closures between their places; the viewer lists them and draws each as
-// a line between its two poses in its source's colour (web/app/colors.js LOOP_COLORS), and
-// the lines show in a screenshot.
+// and rmapd finds loop closures between their places; the viewer lists them (with each one's
+// measured relative pose as distance and turn) and draws each as a line between its two poses
+// in its source's colour (web/app/colors.js LOOP_COLORS), and the lines show in a screenshot.
 //
 //   node --test tests/browser/loop_closures.test.mjs      (env: RMAPD, RMAP_SIM, RMAP_TEST_ARTIFACTS)
 
@@ -73,6 +73,26 @@ describe('loop closures in the viewer', { timeout: 200000 }, () => {
       const items = await page.locator('#loops li').count();
       assert.ok(items > 0, 'the loop closure list is empty');
       assert.equal(await page.locator('#loops-empty').isHidden(), true);
+      // Each listed closure shows its measured relative pose as distance and turn (none: empty).
+      const listed = await page.$$eval('#loops li', (lis) => lis.map((li) => ({
+        name: li.querySelector('.name').textContent, offset: li.querySelector('.loop-offset').textContent,
+      })));
+      const byId = new Map(stored.map((c) => [c.id, c]));
+      let measured = 0;
+      for (const { name, offset } of listed) {
+        const c = byId.get(Number(/^#(\d+)/.exec(name)[1]));
+        if (!c) continue;  // pushed after the test read the store
+        let expected = '';
+        if (c.relative_pose) {
+          const [x, y, z] = c.relative_pose.position;
+          const turn = (2 * Math.acos(Math.min(1, Math.abs(c.relative_pose.orientation[0]))) * 180) / Math.PI;
+          expected = `${Math.hypot(x, y, z).toFixed(2)} m ${turn.toFixed(1)}°`;
+          measured += 1;
+        }
+        assert.equal(offset, expected, `closure ${c.id}`);
+      }
+      log(`listed ${listed.length} closures, ${measured} with a measured relative pose`);
+      assert.ok(measured > 0, 'no listed closure shows a measured relative pose');
       // The lines are on the map's canvas (not only in the list), in the colours of their sources.
       await waitFor('the map drawn', async () => hook((v) => v.cuboidCount() > 0 && v.tileStats().pending === 0),
         { timeout: 60000 });

@@ -461,6 +461,15 @@ function addLoopClosures(events, fresh) {
   }
 }
 
+// A closure's measured relative pose (docs/API.md §6.10) as its distance and turn, or '' when
+// the closure measured none.
+function measuredOffsetText(relative) {
+  if (!relative?.position || !relative.orientation) return '';
+  const [x, y, z] = relative.position;
+  const turnDeg = (2 * Math.acos(Math.min(1, Math.abs(relative.orientation[0]))) * 180) / Math.PI;
+  return `${Math.hypot(x, y, z).toFixed(2)} m ${turnDeg.toFixed(1)}°`;
+}
+
 function renderLoops() {
   renderer.setLoopClosures(state.loops.filter((lc) => lc.a && lc.b));
   const items = state.loops.slice(-200).reverse().map((lc) => {
@@ -474,11 +483,15 @@ function renderLoops() {
     source.className = 'loop-source';
     source.style.color = loopColor(lc.source);
     source.textContent = lc.source || '';
+    const offset = document.createElement('span');
+    offset.className = 'num loop-offset';
+    offset.textContent = measuredOffsetText(lc.event.relative_pose);
+    offset.title = 'measured relative pose: the newer place from the older one';
     const when = document.createElement('span');
     when.className = 'num';
     const stamp = lc.event.query?.stamp_ns ?? lc.event.detected_ns;
     when.textContent = stamp ? new Date(stamp / 1e6).toLocaleTimeString() : '';
-    li.append(name, source, when);
+    li.append(name, source, offset, when);
     return li;
   });
   $('loops').replaceChildren(...items);
