@@ -168,8 +168,11 @@ function handleFrame(frame) {
       refreshRobots(true);
       refreshLoops();
       break;
-    default:
-      if (isLoopClosure(frame)) addLoopClosures([frame.event || frame.loop_closure || frame], true);
+    case 'loop_closure':
+      if (frame.map === state.map) addLoopClosures([frame], true);
+      break;
+    default:  // hello, and frame types of later servers
+      break;
   }
 }
 
@@ -417,36 +420,15 @@ $('show-robots').addEventListener('change', (e) => renderer.setRobotsVisible(e.t
 
 // ----- loop closures -----
 
-function isLoopClosure(frame) {
-  return typeof frame.type === 'string' && /loop/.test(frame.type);
-}
-
-function endsOf(e) {
-  const pos = (v) => {
-    if (!v) return null;
-    if (Array.isArray(v) && v.length >= 3 && v.every((n) => typeof n === 'number')) return v.slice(0, 3);
-    if (v.position) return pos(v.position);
-    if (v.pose) return pos(v.pose);
-    return null;
-  };
-  for (const [a, b] of [['from', 'to'], ['pose_a', 'pose_b'], ['a', 'b'], ['source', 'target'], ['query', 'match'],
-    ['pose_from', 'pose_to'], ['first', 'second']]) {
-    const pa = pos(e[a]);
-    const pb = pos(e[b]);
-    if (pa && pb) return [pa, pb];
-  }
-  return null;
-}
-
+// Closures as docs/API.md §6.10 gives them (the stream's frames add "type"): the two places'
+// positions, null when a place's pose is unknown.
 function addLoopClosures(events, fresh) {
   let changed = false;
   for (const e of events) {
-    const id = e.id ?? `${e.stamp_ns}-${state.loops.length}`;
-    if (state.loopIds.has(id)) continue;
-    state.loopIds.add(id);
-    const ends = endsOf(e);
-    state.loops.push({ id, event: e, a: ends && ends[0], b: ends && ends[1], source: e.source, fresh,
-      at: Date.now() });
+    if (state.loopIds.has(e.id)) continue;
+    state.loopIds.add(e.id);
+    state.loops.push({ id: e.id, event: e, a: e.query?.position ?? null, b: e.match?.position ?? null,
+      source: e.source, fresh, at: Date.now() });
     changed = true;
   }
   if (!changed) return;
