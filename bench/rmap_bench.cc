@@ -115,8 +115,9 @@ int main(int argc, char** argv) {
   d->add_option("--map-image", slam2d.map_image_out, "write the final occupancy map as an 8-bit PGM to this file");
   d->add_option("--map-image-max-px", slam2d.map_image_max_px, "scale the map image down to this longer side")
       ->check(CLI::PositiveNumber);
-  d->add_option("--closure-reference", slam2d.closure_reference_path,
-                "corrected CARMEN log of the same run whose poses judge the closures (scans found by their ranges)");
+  d->add_option("--closure-reference", slam2d.closure_reference_paths,
+                "corrected CARMEN log of the same run whose poses judge the closures (scans found by their ranges); "
+                "repeat for several judges, the first gives the headline figures");
   d->add_option("--submap-keyframes", slam2d.slam.loop_closure.submap_keyframes, "keyframes per loop-closure submap");
   d->add_option("--local-map-keyframes", slam2d.slam.local_map_keyframes,
                 "a sparse trajectory's scans are matched against its newest keyframes only (this many at most; 0: the whole map)");

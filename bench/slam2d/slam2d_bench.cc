@@ -18,6 +18,7 @@
 #include <unordered_map>
 
 #include "common/machine.h"
+#include "slam2d/closure_judge.h"
 #include "slam2d/reflectivity_metrics.h"
 #include "slam2d/trajectory_metrics.h"
 
@@ -157,29 +158,6 @@ void writeMapImage(const std::string& path, const slam2d::GridMap2d& grid, int m
   if (!cv::imwrite(path, image)) throw std::runtime_error("cannot write " + path);
 }
 
-/// Judges accepted loop closures against reference laser poses: a scan
-/// without one borrows the nearest scan's that has one, carried over by the
-/// estimated motion between the two (a few scans: centimetres).
-struct ClosureJudge {
-  std::vector<std::optional<Pose2>> reference;  ///< per input
-  std::unordered_map<int64_t, size_t> index_of_stamp;
-  static constexpr size_t kMaxBorrow = 30;      ///< scans searched each way for a reference pose
-  static constexpr double kMaxError_m = 0.3, kMaxError_rad = 5.0 / kDegPerRad;
-
-  std::optional<Pose2> referenceOf(int64_t stamp, const std::vector<Pose2>& estimate) const {
-    const auto it = index_of_stamp.find(stamp);
-    if (it == index_of_stamp.end()) return std::nullopt;
-    const size_t i = it->second;
-    for (size_t d = 0; d <= kMaxBorrow; ++d) {
-      for (const size_t j : {i - d, i + d}) {
-        if (j >= reference.size() || !reference[j]) continue;  // i − d wraps below 0 to a huge index
-        return *reference[j] * between(estimate[j], estimate[i]);
-      }
-    }
-    return std::nullopt;
-  }
-};
-
 }  // namespace
 
 int runSlam2dBench(const Slam2dBenchOptions& options) {
@@ -251,82 +229,54 @@ int runSlam2dBench(const Slam2dBenchOptions& options) {
             {"machine", machineJson()}};
   if (!run.first_rejection.empty()) r["first_rejection"] = run.first_rejection;
   if (const slam2d::LoopClosureStats* lc = slam.loopClosureStats()) {
-    // Judge: a corrected log of the same run (scans found by their ranges), else the reference poses.
-    ClosureJudge judge;
-    // A closure names its scans by stamp: scans sharing a stamp (logs whose stamps were rounded) cannot be judged.
-    constexpr size_t kShared = std::numeric_limits<size_t>::max();
-    for (size_t i = 0; i < data.inputs.size(); ++i) {
-      const auto [it, inserted] = judge.index_of_stamp.emplace(data.inputs[i].scan.stamp_ns, i);
-      if (!inserted) it->second = kShared;
+    JudgedRun judged_run{{}, {}, run.laser_poses};
+    for (const Slam2dInput& in : data.inputs) {
+      judged_run.stamps_ns.push_back(in.scan.stamp_ns);
+      judged_run.sensor_mounts.push_back(in.scan.sensor_mount);
     }
-    std::erase_if(judge.index_of_stamp, [&](const auto& entry) { return entry.second == kShared; });
-    std::string judged_by = data.reference_kind;
-    if (!options.closure_reference_path.empty()) {
+    // Judges: each corrected log of the same run (scans found by their ranges), else the reference poses.
+    std::vector<ClosureJudge> judges;
+    const std::unordered_map<int64_t, size_t> input_of_stamp = uniqueStampIndex(judged_run.stamps_ns);
+    for (const std::string& path : options.closure_reference_paths) {
       Slam2dSourceOptions ref_source;
       ref_source.stamps_path = options.source;
       ref_source.odometry = OdometrySource::kNone;
-      const Slam2dDataset ref = loadSlam2dDataset(options.closure_reference_path, ref_source);
-      judge.reference.assign(data.inputs.size(), std::nullopt);
+      const Slam2dDataset ref = loadSlam2dDataset(path, ref_source);
+      ClosureJudge judge{"poses of " + path + " (" + std::to_string(ref.stamps_replaced) + " scans found)",
+                         std::vector<std::optional<Pose2>>(data.inputs.size())};
       for (size_t k = 0; k < ref.inputs.size(); ++k) {
-        const auto it = judge.index_of_stamp.find(ref.inputs[k].scan.stamp_ns);
-        if (it != judge.index_of_stamp.end() && ref.reference[k]) judge.reference[it->second] = ref.reference[k];
+        const auto it = input_of_stamp.find(ref.inputs[k].scan.stamp_ns);
+        if (it != input_of_stamp.end() && ref.reference[k]) judge.reference[it->second] = ref.reference[k];
       }
-      judged_by = "poses of " + options.closure_reference_path + " (" + std::to_string(ref.stamps_replaced) +
-                  " scans found)";
-    } else if (data.reference_kind.find("raw odometry") == std::string::npos) {
-      judge.reference = data.reference;
-    } else {
-      judged_by = "none (raw odometry is no reference)";
+      judges.push_back(std::move(judge));
     }
-    size_t judged = 0, false_closures = 0, cross = 0;
-    double worst_m = 0.0;
-    json list = json::array();
-    for (const slam2d::LoopClosure2d& c : closures) {
-      cross += c.query_trajectory != c.match_trajectory;
-      const auto mount_it = judge.index_of_stamp.find(c.query_stamp_ns);
-      const Pose2 mount = mount_it == judge.index_of_stamp.end() ? Pose2{} : data.inputs[mount_it->second].scan.sensor_mount;
-      const Pose2 measured = mount.inverse() * c.relative * mount;  // laser to laser
-      json item = {{"query_stamp_ns", c.query_stamp_ns}, {"match_stamp_ns", c.match_stamp_ns}, {"score", c.score},
-                   {"relative", {c.relative.x_m, c.relative.y_m, c.relative.theta_rad}}};
-      const std::optional<Pose2> rq = judge.referenceOf(c.query_stamp_ns, run.laser_poses);
-      const std::optional<Pose2> rm = judge.referenceOf(c.match_stamp_ns, run.laser_poses);
-      if (rq && rm) {
-        const Pose2 e = between(between(*rm, *rq), measured);
-        const bool wrong = e.translation().norm() > ClosureJudge::kMaxError_m ||
-                           std::abs(e.theta_rad) > ClosureJudge::kMaxError_rad;
-        ++judged;
-        false_closures += wrong;
-        worst_m = std::max(worst_m, e.translation().norm());
-        item["error_m"] = e.translation().norm();
-        item["error_deg"] = std::abs(e.theta_rad) * kDegPerRad;
-        item["false"] = wrong;
-      }
-      list.push_back(item);
-    }
-    r["loop_closure"] = {{"closures", closures.size()},
-                         {"cross_trajectory_closures", cross},
-                         {"closures_judged", judged},
-                         {"false_closures", judged > 0 ? json(false_closures) : json(nullptr)},
-                         {"worst_closure_error_m", judged > 0 ? json(worst_m) : json(nullptr)},
-                         {"judged_by", judged_by},
-                         {"keyframes", slam.keyframeCount()},
-                         {"searches", lc->searches},
-                         {"matches", lc->matches},
-                         {"ambiguous", lc->ambiguous},
-                         {"accepted", lc->accepted},
-                         {"unsupported", lc->unsupported},
-                         {"rejected_after_optimization", lc->rejected_after_optimization},
-                         {"optimizations", lc->optimizations},
-                         {"graph_versions", slam.graphVersion()},
-                         {"optimization_s", lc->optimization_s},
-                         {"search_s", lc->search_s},
-                         {"submaps_built", lc->submaps_built},
-                         {"list", list}};
-    std::printf("loop closure: %zu closures (%zu judged by %s, %zu false, worst %.3f m), %llu searches, %llu "
-                "optimisations %.2f s, search %.2f s\n",
-                closures.size(), judged, judged_by.c_str(), false_closures, worst_m,
+    if (judges.empty() && data.reference_kind.find("raw odometry") == std::string::npos)
+      judges.push_back({data.reference_kind, data.reference});
+    json lc_json = judgeClosures(closures, judged_run, judges);
+    if (judges.empty()) lc_json["judged_by"] = "none (raw odometry is no reference)";
+    lc_json.update({{"keyframes", slam.keyframeCount()},
+                    {"searches", lc->searches},
+                    {"matches", lc->matches},
+                    {"ambiguous", lc->ambiguous},
+                    {"accepted", lc->accepted},
+                    {"unsupported", lc->unsupported},
+                    {"rejected_after_optimization", lc->rejected_after_optimization},
+                    {"optimizations", lc->optimizations},
+                    {"graph_versions", slam.graphVersion()},
+                    {"optimization_s", lc->optimization_s},
+                    {"search_s", lc->search_s},
+                    {"submaps_built", lc->submaps_built}});
+    std::printf("loop closure: %zu closures, %llu searches, %llu optimisations %.2f s, search %.2f s\n", closures.size(),
                 static_cast<unsigned long long>(lc->searches), static_cast<unsigned long long>(lc->optimizations),
                 lc->optimization_s, lc->search_s);
+    for (const json& j : lc_json["judges"])
+      std::printf("  %zu judged by %s: %zu false, worst %.3f m\n", j["closures_judged"].get<size_t>(),
+                  j["judged_by"].get<std::string>().c_str(), j["false_closures"].get<size_t>(),
+                  j["worst_closure_error_m"].is_null() ? 0.0 : j["worst_closure_error_m"].get<double>());
+    if (judges.size() > 1)
+      std::printf("  false by every judge: %zu of the %zu closures all judged\n",
+                  lc_json["false_by_all_judges"].get<size_t>(), lc_json["closures_judged_by_all"].get<size_t>());
+    r["loop_closure"] = std::move(lc_json);
   }
   // Baseline: the same relations scored on the reference trajectory (raw
   // odometry in a raw log, the correcting SLAM's poses in a corrected log).

@@ -1,0 +1,62 @@
+#pragma once
+
+#include <cstdint>
+#include <nlohmann/json.hpp>
+#include <numbers>
+#include <optional>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include "slam2d/loop_closure.h"
+#include "slam2d/pose2.h"
+
+namespace rmap::bench {
+
+/// One set of reference laser poses that judges loop closures: a corrected
+/// log of the run, or the log's own reference poses.
+struct ClosureJudge {
+  std::string judged_by;                                ///< where the poses come from, for the report
+  std::vector<std::optional<slam2d::Pose2>> reference;  ///< per input scan; none where the reference lacks the scan
+
+  /// A closure is false when its relative pose is off by more than this.
+  static constexpr double kMaxError_m = 0.3;
+  static constexpr double kMaxError_rad = 5.0 * std::numbers::pi / 180.0;
+  /// A scan without a reference pose borrows the nearest one within this
+  /// many scans either way, carried over by the estimated motion between the
+  /// two (a few scans: centimetres).
+  static constexpr size_t kMaxBorrow = 30;
+
+  /// @param input  index of the scan, none for a scan that cannot be named
+  /// @param laser_poses  the estimated laser pose of every input scan
+  std::optional<slam2d::Pose2> referenceOf(std::optional<size_t> input,
+                                           const std::vector<slam2d::Pose2>& laser_poses) const;
+};
+
+/// Index of each stamp among `stamps_ns`, without the stamps several scans
+/// share (logs whose stamps were rounded): those do not name one scan.
+std::unordered_map<int64_t, size_t> uniqueStampIndex(const std::vector<int64_t>& stamps_ns);
+
+/// The input scans as the judge sees them.
+struct JudgedRun {
+  std::vector<int64_t> stamps_ns;            ///< per input scan; closures name their scans by stamp
+  std::vector<slam2d::Pose2> sensor_mounts;  ///< per input scan, robot → laser
+  std::vector<slam2d::Pose2> laser_poses;    ///< per input scan, the final estimate
+};
+
+/// Judges every closure against every judge: the error of its measured
+/// laser-to-laser relative pose against each judge's poses of its two scans.
+/// Scans that share a stamp are not judged (the stamp does not name them).
+/// Two corrections of one run can disagree (raw mit-csail, BENCHMARKS.md
+/// §4), so each judge's verdict is kept; the first judge's gives the
+/// headline fields.
+/// @return JSON: closures_judged, false_closures, worst_closure_error_m and
+///         judged_by (the first judge's; null without a judge), judges (each
+///         judge's counts), closures_judged_by_all and false_by_all_judges
+///         (with two judges or more, else null), cross_trajectory_closures,
+///         list (each closure, with the first judge's error and, with two
+///         judges or more, by_judge)
+nlohmann::json judgeClosures(const std::vector<slam2d::LoopClosure2d>& closures, const JudgedRun& run,
+                             const std::vector<ClosureJudge>& judges);
+
+}  // namespace rmap::bench

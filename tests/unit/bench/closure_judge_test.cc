@@ -1,0 +1,129 @@
+#include "slam2d/closure_judge.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+namespace rmap::bench {
+namespace {
+
+using slam2d::Pose2;
+
+constexpr double kDeg = std::numbers::pi / 180.0;
+
+/// Ten scans 1 m apart along x, turning 10° each; the laser 0.2 m ahead of
+/// the robot's centre; the estimate equals the truth.
+struct TenScanRun {
+  JudgedRun judged;
+  std::vector<Pose2> robot_truth;
+  TenScanRun() {
+    const Pose2 mount{0.2, 0.0, 0.0};
+    for (int i = 0; i < 10; ++i) {
+      robot_truth.push_back({double(i), 0.5 * i, 10.0 * kDeg * i});
+      judged.stamps_ns.push_back(1000 + i);
+      judged.sensor_mounts.push_back(mount);
+      judged.laser_poses.push_back(robot_truth.back() * mount);
+    }
+  }
+  /// A closure whose relative robot pose is the truth's, then `error` on top.
+  slam2d::LoopClosure2d closure(size_t query, size_t match, const Pose2& error = {}) const {
+    slam2d::LoopClosure2d c;
+    c.query_stamp_ns = judged.stamps_ns[query];
+    c.match_stamp_ns = judged.stamps_ns[match];
+    c.relative = between(robot_truth[match], robot_truth[query]) * error;
+    return c;
+  }
+  ClosureJudge truthJudge(const std::string& name) const {
+    return {name, std::vector<std::optional<Pose2>>(judged.laser_poses.begin(), judged.laser_poses.end())};
+  }
+};
+
+TEST(ClosureJudge, AClosureIsFalseBeyondThreeDecimetresOrFiveDegrees) {
+  const TenScanRun run;
+  const std::vector<slam2d::LoopClosure2d> closures = {
+      run.closure(8, 2),                          // right, in laser and robot frames alike
+      run.closure(9, 3, {0.25, 0.0, 4.0 * kDeg}),  // off, within the bounds
+      run.closure(7, 1, {0.0, 0.35, 0.0}),         // 0.35 m off
+      run.closure(6, 0, {0.0, 0.0, 6.0 * kDeg}),   // 6° off
+  };
+  const nlohmann::json r = judgeClosures(closures, run.judged, {run.truthJudge("truth")});
+  EXPECT_EQ(r["closures_judged"], 4);
+  EXPECT_EQ(r["false_closures"], 2);
+  EXPECT_EQ(r["judged_by"], "truth");
+  EXPECT_TRUE(r["false_by_all_judges"].is_null());  // one judge only
+  const nlohmann::json& list = r["list"];
+  ASSERT_EQ(list.size(), 4u);
+  EXPECT_NEAR(list[0]["error_m"].get<double>(), 0.0, 1e-9);
+  EXPECT_FALSE(list[0]["false"].get<bool>());
+  EXPECT_NEAR(list[1]["error_deg"].get<double>(), 4.0, 1e-6);
+  EXPECT_FALSE(list[1]["false"].get<bool>());
+  EXPECT_TRUE(list[2]["false"].get<bool>());
+  EXPECT_NEAR(list[3]["error_deg"].get<double>(), 6.0, 1e-6);
+  EXPECT_TRUE(list[3]["false"].get<bool>());
+  EXPECT_FALSE(list[0].contains("by_judge"));
+  EXPECT_NEAR(r["worst_closure_error_m"].get<double>(), list[2]["error_m"].get<double>(), 1e-12);
+}
+
+// Two corrections of one run can disagree on a single scan: each judge's
+// verdict is kept, and a closure counts as false by all only when every
+// judge says so.
+TEST(ClosureJudge, EachJudgeGivesItsVerdict) {
+  const TenScanRun run;
+  ClosureJudge skewed = run.truthJudge("skewed");
+  *skewed.reference[2] = *skewed.reference[2] * Pose2{0.0, 0.0, 12.0 * kDeg};  // one pose of this correction is off
+  const std::vector<slam2d::LoopClosure2d> closures = {
+      run.closure(8, 2),                        // right: only the skewed judge calls it false
+      run.closure(9, 4, {0.5, 0.0, 0.0}),       // wrong: both do
+      run.closure(7, 3),                        // right: both agree
+  };
+  const nlohmann::json r = judgeClosures(closures, run.judged, {run.truthJudge("truth"), skewed});
+  EXPECT_EQ(r["false_closures"], 1);  // the first judge's
+  ASSERT_EQ(r["judges"].size(), 2u);
+  EXPECT_EQ(r["judges"][0]["false_closures"], 1);
+  EXPECT_EQ(r["judges"][1]["false_closures"], 2);
+  EXPECT_EQ(r["judges"][1]["judged_by"], "skewed");
+  EXPECT_EQ(r["closures_judged_by_all"], 3);
+  EXPECT_EQ(r["false_by_all_judges"], 1);
+  const nlohmann::json& first = r["list"][0];
+  EXPECT_FALSE(first["false"].get<bool>());
+  EXPECT_FALSE(first["by_judge"][0]["false"].get<bool>());
+  EXPECT_TRUE(first["by_judge"][1]["false"].get<bool>());
+  EXPECT_NEAR(first["by_judge"][1]["error_deg"].get<double>(), 12.0, 1e-6);
+}
+
+TEST(ClosureJudge, AScanWithoutAReferenceBorrowsItsNearestNeighboursThroughTheEstimate) {
+  TenScanRun run;
+  ClosureJudge sparse = run.truthJudge("sparse");
+  for (size_t i : {1, 2, 3, 5, 6, 7, 8}) sparse.reference[i].reset();
+  const slam2d::LoopClosure2d right = run.closure(8, 2);
+  nlohmann::json r = judgeClosures({right}, run.judged, {sparse});
+  EXPECT_EQ(r["closures_judged"], 1);
+  EXPECT_NEAR(r["list"][0]["error_m"].get<double>(), 0.0, 1e-9);
+  // The estimate carries the borrowed pose: scan 2 borrows scan 0's, so an
+  // estimate bent between the two shows in the verdict.
+  run.judged.laser_poses[2] = run.judged.laser_poses[2] * Pose2{0.0, 0.0, 7.0 * kDeg};
+  r = judgeClosures({right}, run.judged, {sparse});
+  EXPECT_NEAR(r["list"][0]["error_deg"].get<double>(), 7.0, 1e-6);
+  // Beyond the borrowing distance nothing is judged.
+  ClosureJudge none = run.truthJudge("none");
+  for (auto& p : none.reference) p.reset();
+  r = judgeClosures({right}, run.judged, {none});
+  EXPECT_EQ(r["closures_judged"], 0);
+  EXPECT_TRUE(r["false_closures"].is_null());
+  EXPECT_FALSE(r["list"][0].contains("error_m"));
+}
+
+TEST(ClosureJudge, ScansSharingAStampAreNotJudged) {
+  TenScanRun run;
+  run.judged.stamps_ns[2] = run.judged.stamps_ns[3];  // a log with rounded stamps
+  const nlohmann::json r = judgeClosures({run.closure(8, 3), run.closure(8, 4)}, run.judged, {run.truthJudge("truth")});
+  EXPECT_EQ(r["closures_judged"], 1);
+  EXPECT_FALSE(r["list"][0].contains("error_m"));
+  EXPECT_TRUE(r["list"][1].contains("error_m"));
+  EXPECT_EQ(uniqueStampIndex(run.judged.stamps_ns).count(run.judged.stamps_ns[3]), 0u);
+  EXPECT_EQ(uniqueStampIndex(run.judged.stamps_ns).at(run.judged.stamps_ns[4]), 4u);
+}
+
+}  // namespace
+}  // namespace rmap::bench
