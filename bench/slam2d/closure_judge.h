@@ -46,17 +46,21 @@ struct JudgedRun {
 
 /// Judges every closure against every judge: the error of its measured
 /// laser-to-laser relative pose against each judge's poses of its two scans.
+/// `withdrawn` are the closures a later optimisation dropped (they stay
+/// counted: they were accepted), flagged in the list and counted apart.
 /// Scans that share a stamp are not judged (the stamp does not name them).
 /// Two corrections of one run can disagree (raw mit-csail, BENCHMARKS.md
 /// §4), so each judge's verdict is kept; the first judge's gives the
 /// headline fields.
-/// @return JSON: closures_judged, false_closures, worst_closure_error_m and
-///         judged_by (the first judge's; null without a judge), judges (each
-///         judge's counts), closures_judged_by_all and false_by_all_judges
-///         (with two judges or more, else null), cross_trajectory_closures,
-///         list (each closure, with the first judge's error and, with two
-///         judges or more, by_judge)
-nlohmann::json judgeClosures(const std::vector<slam2d::LoopClosure2d>& closures, const JudgedRun& run,
+/// @return JSON: closures, withdrawn, cross_trajectory_closures;
+///         closures_judged, false_closures, false_closures_withdrawn,
+///         worst_closure_error_m and judged_by (the first judge's; null
+///         without a judge); judges (each judge's counts);
+///         closures_judged_by_all and false_by_all_judges (with two judges or
+///         more, else null); list (each closure with `withdrawn`, the first
+///         judge's error and, with two judges or more, by_judge)
+nlohmann::json judgeClosures(const std::vector<slam2d::LoopClosure2d>& closures,
+                             const std::vector<slam2d::LoopClosure2d>& withdrawn, const JudgedRun& run,
                              const std::vector<ClosureJudge>& judges);
 
 }  // namespace rmap::bench

@@ -184,6 +184,7 @@ int runSlam2dBench(const Slam2dBenchOptions& options) {
   slam2d::Slam2d slam(options.slam);
   const SlamRun run = runSlam(slam, data.inputs);
   const std::vector<slam2d::LoopClosure2d> closures = slam.takeLoopClosures();
+  const std::vector<slam2d::LoopClosure2d> withdrawn = slam.takeWithdrawnLoopClosures();
 
   const RelationErrors rel = relationErrors(stamped(data.inputs, run.laser_poses), data.relations);
   const Paired scored = paired(data.inputs, run.laser_poses, data.reference);
@@ -252,7 +253,7 @@ int runSlam2dBench(const Slam2dBenchOptions& options) {
     }
     if (judges.empty() && data.reference_kind.find("raw odometry") == std::string::npos)
       judges.push_back({data.reference_kind, data.reference});
-    json lc_json = judgeClosures(closures, judged_run, judges);
+    json lc_json = judgeClosures(closures, withdrawn, judged_run, judges);
     if (judges.empty()) lc_json["judged_by"] = "none (raw odometry is no reference)";
     lc_json.update({{"keyframes", slam.keyframeCount()},
                     {"searches", lc->searches},
@@ -261,17 +262,20 @@ int runSlam2dBench(const Slam2dBenchOptions& options) {
                     {"accepted", lc->accepted},
                     {"unsupported", lc->unsupported},
                     {"rejected_after_optimization", lc->rejected_after_optimization},
+                    {"withdrawn_by_the_graph", lc->withdrawn},
                     {"optimizations", lc->optimizations},
                     {"graph_versions", slam.graphVersion()},
                     {"optimization_s", lc->optimization_s},
                     {"search_s", lc->search_s},
                     {"submaps_built", lc->submaps_built}});
-    std::printf("loop closure: %zu closures, %llu searches, %llu optimisations %.2f s, search %.2f s\n", closures.size(),
-                static_cast<unsigned long long>(lc->searches), static_cast<unsigned long long>(lc->optimizations),
-                lc->optimization_s, lc->search_s);
+    std::printf("loop closure: %zu closures (%zu withdrawn later), %llu searches, %llu optimisations %.2f s, search "
+                "%.2f s\n",
+                closures.size(), lc_json["withdrawn"].get<size_t>(), static_cast<unsigned long long>(lc->searches),
+                static_cast<unsigned long long>(lc->optimizations), lc->optimization_s, lc->search_s);
     for (const json& j : lc_json["judges"])
-      std::printf("  %zu judged by %s: %zu false, worst %.3f m\n", j["closures_judged"].get<size_t>(),
-                  j["judged_by"].get<std::string>().c_str(), j["false_closures"].get<size_t>(),
+      std::printf("  %zu judged by %s: %zu false (%zu of them withdrawn later), worst %.3f m\n",
+                  j["closures_judged"].get<size_t>(), j["judged_by"].get<std::string>().c_str(),
+                  j["false_closures"].get<size_t>(), j["false_closures_withdrawn"].get<size_t>(),
                   j["worst_closure_error_m"].is_null() ? 0.0 : j["worst_closure_error_m"].get<double>());
     if (judges.size() > 1)
       std::printf("  false by every judge: %zu of the %zu closures all judged\n",

@@ -140,7 +140,8 @@ bool LoopCloser::addKeyframe(std::vector<Keyframe>& keyframes) {
     if (p.supported) {
       const size_t e = graph_.addEdge({p.closure.match, p.closure.query, toGraph(p.closure.relative), p.information, true});
       loop_edges_.push_back(e);
-      awaiting_.push_back({p.closure, e});
+      ledger_.await(e, p.closure);
+      awaiting_ = true;
       trajectories_[keyframes[p.closure.query].trajectory].travel_since_closure_m = 0.0;
     } else if (keyframe_count_ - p.added_at <= static_cast<uint64_t>(options_.support_keyframes)) {
       still.push_back(p);
@@ -150,7 +151,7 @@ bool LoopCloser::addKeyframe(std::vector<Keyframe>& keyframes) {
   }
   pending_ = std::move(still);
 
-  if (awaiting_.empty()) return false;
+  if (!awaiting_) return false;
   if (!large_correction && keyframe_count_ - last_optimization_ < static_cast<uint64_t>(options_.optimize_every_keyframes))
     return false;
   return optimize(keyframes);
@@ -273,12 +274,10 @@ bool LoopCloser::optimize(std::vector<Keyframe>& keyframes) {
     }
   }
   if (rejected) usable = graph_.optimize().usable || usable;
-  for (const Awaiting& a : awaiting_) {
-    if (!graph_.edgeEnabled(a.edge)) continue;
-    accepted_.push_back(a.closure);
-    ++stats_.accepted;
-  }
-  awaiting_.clear();
+  const ClosureLedger::Settled settled = ledger_.settle([&](size_t e) { return graph_.edgeEnabled(e); });
+  stats_.accepted += settled.accepted;
+  stats_.withdrawn += settled.withdrawn;
+  awaiting_ = false;
   bool moved = false;
   for (size_t i = 0; i < keyframes.size(); ++i) {
     const Pose2 p = graphPose(i);
@@ -289,12 +288,6 @@ bool LoopCloser::optimize(std::vector<Keyframe>& keyframes) {
   if (moved) dropBentSubmaps(keyframes);
   stats_.optimization_s += secondsSince(t0);
   return usable && moved;
-}
-
-std::vector<LoopCloser::Closure> LoopCloser::takeClosures() {
-  std::vector<Closure> out;
-  out.swap(accepted_);
-  return out;
 }
 
 }  // namespace rmap::slam2d

@@ -29,7 +29,9 @@
 ///     more than max_loop_error_m after optimisation (check 4);
 ///  4. loop edges carry a Huber loss, and after each optimisation a loop edge
 ///     still off by more than max_loop_error_m / _rad is disabled and the
-///     graph optimised again.
+///     graph optimised again. A closure is accepted when the optimisation
+///     after it keeps its edge; a later one that disables the edge withdraws
+///     it (ClosureLedger).
 /// The graph is optimised when supported closures wait and either
 /// optimize_every_keyframes keyframes passed since the last optimisation or
 /// one of them corrects the estimate by more than small_correction_m.
@@ -43,6 +45,7 @@
 #include <vector>
 
 #include "graph/pose_graph_2d.h"
+#include "slam2d/closure_ledger.h"
 #include "slam2d/correlative_matcher.h"
 #include "slam2d/keyframe.h"
 #include "slam2d/pose2.h"
@@ -148,7 +151,8 @@ struct LoopClosureStats {
   uint64_t ambiguous = 0;      ///< of the matches, those with a rival (SubmapMatcherOptions::ambiguity_*)
   uint64_t accepted = 0;       ///< closures that entered the graph
   uint64_t unsupported = 0;    ///< dropped for lack of support
-  uint64_t rejected_after_optimization = 0;
+  uint64_t rejected_after_optimization = 0;  ///< loop edges disabled (new ones, and accepted ones: withdrawn)
+  uint64_t withdrawn = 0;      ///< accepted closures a later optimisation disabled
   uint64_t optimizations = 0;
   double search_s = 0.0, optimization_s = 0.0;  ///< wall time (steady clock)
   uint64_t submaps_built = 0;
@@ -166,13 +170,11 @@ class LoopCloser {
   /// @return true when keyframe poses moved
   bool addKeyframe(std::vector<Keyframe>& keyframes);
 
-  /// Closures accepted since the last call, as keyframe indices.
-  struct Closure {
-    size_t query = 0, match = 0;
-    double score = 0.0;
-    Pose2 relative;
-  };
-  std::vector<Closure> takeClosures();
+  using Closure = KeyframeClosure;
+  /// Closures accepted since the last call.
+  std::vector<Closure> takeClosures() { return ledger_.takeAccepted(); }
+  /// Closures withdrawn since the last call (take the accepted ones first).
+  std::vector<Closure> takeWithdrawnClosures() { return ledger_.takeWithdrawn(); }
   const LoopClosureStats& stats() const { return stats_; }
   const LoopClosureOptions& options() const { return options_; }
 
@@ -201,10 +203,6 @@ class LoopCloser {
     uint64_t added_at = 0;  ///< keyframe count when found
     bool supported = false;
   };
-  struct Awaiting {  ///< in the graph, not yet through an optimisation
-    Closure closure;
-    size_t edge = 0;
-  };
 
   void search(std::vector<Keyframe>& keyframes, size_t query, TrajectoryState& trajectory);
   const SubmapMatcher& matcher(const std::vector<Keyframe>& keyframes, size_t submap);
@@ -230,9 +228,9 @@ class LoopCloser {
   void dropBentSubmaps(const std::vector<Keyframe>& keyframes);
   std::list<CachedSubmap> cache_;  ///< most recently used first
   std::vector<Pending> pending_;
-  std::vector<Awaiting> awaiting_;
   std::vector<size_t> loop_edges_;
-  std::vector<Closure> accepted_;
+  ClosureLedger ledger_;
+  bool awaiting_ = false;  ///< closures entered the graph since the last optimisation
   uint64_t keyframe_count_ = 0;
   uint64_t last_optimization_ = 0;
   LoopClosureStats stats_;

@@ -366,16 +366,23 @@ const GridMap2d& Slam2d::matchingMap(size_t index) const {
   return !maps.empty() && maps.front().keyframes.size() >= half && !maps.front().grid.empty() ? maps.front().grid : map_;
 }
 
-std::vector<LoopClosure2d> Slam2d::takeLoopClosures() {
+std::vector<LoopClosure2d> Slam2d::reported(const std::vector<KeyframeClosure>& closures) const {
   std::vector<LoopClosure2d> out;
-  if (!loop_closer_) return out;
-  for (const LoopCloser::Closure& c : loop_closer_->takeClosures()) {
+  for (const KeyframeClosure& c : closures) {
     const Keyframe& query = keyframes_[c.query];
     const Keyframe& match = keyframes_[c.match];
     out.push_back({names_[query.trajectory], query.stamp_ns, query.pose, names_[match.trajectory], match.stamp_ns,
                    match.pose, c.score, c.relative});
   }
   return out;
+}
+
+std::vector<LoopClosure2d> Slam2d::takeLoopClosures() {
+  return loop_closer_ ? reported(loop_closer_->takeClosures()) : std::vector<LoopClosure2d>{};
+}
+
+std::vector<LoopClosure2d> Slam2d::takeWithdrawnLoopClosures() {
+  return loop_closer_ ? reported(loop_closer_->takeWithdrawnClosures()) : std::vector<LoopClosure2d>{};
 }
 
 std::vector<StampedPose2> Slam2d::trajectory(const std::string& trajectory) const {

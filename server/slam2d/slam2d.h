@@ -172,6 +172,9 @@ class Slam2d {
 
   /// Loop closures accepted (through an optimisation) since the last call.
   std::vector<LoopClosure2d> takeLoopClosures();
+  /// Accepted loop closures a later optimisation dropped, since the last
+  /// call (take the accepted ones first: one may be both). Poses as now.
+  std::vector<LoopClosure2d> takeWithdrawnLoopClosures();
   /// Every scan's robot pose in scan order, corrected by the pose graph (each
   /// scan rides on the keyframe before it); empty for an unknown trajectory.
   std::vector<StampedPose2> trajectory(const std::string& trajectory) const;
@@ -185,6 +188,8 @@ class Slam2d {
   size_t keyframeCount() const { return keyframes_.size(); }
 
  private:
+  /// The closures as reported: trajectories by name, scans by stamp, poses as now.
+  std::vector<LoopClosure2d> reported(const std::vector<KeyframeClosure>& closures) const;
   struct Trajectory {
     Pose2 pose;
     std::optional<Pose2> odometry;  ///< at the last scan (none when it came without)

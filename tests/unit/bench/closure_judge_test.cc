@@ -47,7 +47,7 @@ TEST(ClosureJudge, AClosureIsFalseBeyondThreeDecimetresOrFiveDegrees) {
       run.closure(7, 1, {0.0, 0.35, 0.0}),         // 0.35 m off
       run.closure(6, 0, {0.0, 0.0, 6.0 * kDeg}),   // 6° off
   };
-  const nlohmann::json r = judgeClosures(closures, run.judged, {run.truthJudge("truth")});
+  const nlohmann::json r = judgeClosures(closures, {}, run.judged, {run.truthJudge("truth")});
   EXPECT_EQ(r["closures_judged"], 4);
   EXPECT_EQ(r["false_closures"], 2);
   EXPECT_EQ(r["judged_by"], "truth");
@@ -77,7 +77,7 @@ TEST(ClosureJudge, EachJudgeGivesItsVerdict) {
       run.closure(9, 4, {0.5, 0.0, 0.0}),       // wrong: both do
       run.closure(7, 3),                        // right: both agree
   };
-  const nlohmann::json r = judgeClosures(closures, run.judged, {run.truthJudge("truth"), skewed});
+  const nlohmann::json r = judgeClosures(closures, {}, run.judged, {run.truthJudge("truth"), skewed});
   EXPECT_EQ(r["false_closures"], 1);  // the first judge's
   ASSERT_EQ(r["judges"].size(), 2u);
   EXPECT_EQ(r["judges"][0]["false_closures"], 1);
@@ -92,23 +92,39 @@ TEST(ClosureJudge, EachJudgeGivesItsVerdict) {
   EXPECT_NEAR(first["by_judge"][1]["error_deg"].get<double>(), 12.0, 1e-6);
 }
 
+// A closure the graph withdrew later was still accepted: it counts, flagged.
+TEST(ClosureJudge, WithdrawnClosuresStayCountedAndAreFlagged) {
+  const TenScanRun run;
+  const std::vector<slam2d::LoopClosure2d> closures = {run.closure(8, 2), run.closure(7, 1, {0.0, 0.35, 0.0}),
+                                                       run.closure(6, 0, {0.0, 0.0, 6.0 * kDeg})};
+  const nlohmann::json r = judgeClosures(closures, {closures[1]}, run.judged, {run.truthJudge("truth")});
+  EXPECT_EQ(r["closures"], 3);
+  EXPECT_EQ(r["withdrawn"], 1);
+  EXPECT_EQ(r["false_closures"], 2);
+  EXPECT_EQ(r["false_closures_withdrawn"], 1);
+  EXPECT_EQ(r["judges"][0]["false_closures_withdrawn"], 1);
+  EXPECT_FALSE(r["list"][0]["withdrawn"].get<bool>());
+  EXPECT_TRUE(r["list"][1]["withdrawn"].get<bool>());
+  EXPECT_FALSE(r["list"][2]["withdrawn"].get<bool>());
+}
+
 TEST(ClosureJudge, AScanWithoutAReferenceBorrowsItsNearestNeighboursThroughTheEstimate) {
   TenScanRun run;
   ClosureJudge sparse = run.truthJudge("sparse");
   for (size_t i : {1, 2, 3, 5, 6, 7, 8}) sparse.reference[i].reset();
   const slam2d::LoopClosure2d right = run.closure(8, 2);
-  nlohmann::json r = judgeClosures({right}, run.judged, {sparse});
+  nlohmann::json r = judgeClosures({right}, {}, run.judged, {sparse});
   EXPECT_EQ(r["closures_judged"], 1);
   EXPECT_NEAR(r["list"][0]["error_m"].get<double>(), 0.0, 1e-9);
   // The estimate carries the borrowed pose: scan 2 borrows scan 0's, so an
   // estimate bent between the two shows in the verdict.
   run.judged.laser_poses[2] = run.judged.laser_poses[2] * Pose2{0.0, 0.0, 7.0 * kDeg};
-  r = judgeClosures({right}, run.judged, {sparse});
+  r = judgeClosures({right}, {}, run.judged, {sparse});
   EXPECT_NEAR(r["list"][0]["error_deg"].get<double>(), 7.0, 1e-6);
   // Beyond the borrowing distance nothing is judged.
   ClosureJudge none = run.truthJudge("none");
   for (auto& p : none.reference) p.reset();
-  r = judgeClosures({right}, run.judged, {none});
+  r = judgeClosures({right}, {}, run.judged, {none});
   EXPECT_EQ(r["closures_judged"], 0);
   EXPECT_TRUE(r["false_closures"].is_null());
   EXPECT_FALSE(r["list"][0].contains("error_m"));
@@ -117,7 +133,7 @@ TEST(ClosureJudge, AScanWithoutAReferenceBorrowsItsNearestNeighboursThroughTheEs
 TEST(ClosureJudge, ScansSharingAStampAreNotJudged) {
   TenScanRun run;
   run.judged.stamps_ns[2] = run.judged.stamps_ns[3];  // a log with rounded stamps
-  const nlohmann::json r = judgeClosures({run.closure(8, 3), run.closure(8, 4)}, run.judged, {run.truthJudge("truth")});
+  const nlohmann::json r = judgeClosures({run.closure(8, 3), run.closure(8, 4)}, {}, run.judged, {run.truthJudge("truth")});
   EXPECT_EQ(r["closures_judged"], 1);
   EXPECT_FALSE(r["list"][0].contains("error_m"));
   EXPECT_TRUE(r["list"][1].contains("error_m"));
