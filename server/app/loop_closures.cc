@@ -48,7 +48,8 @@ store::LoopClosureRecord toRecord(const LoopClosure& c, int64_t detected_ns) {
           c.match.robot_id,
           c.match.stamp_ns,
           detected_ns,
-          body.dump()};
+          body.dump(),
+          std::nullopt};
 }
 
 nlohmann::json loopClosureJson(const store::LoopClosureRecord& r) {
@@ -61,7 +62,8 @@ nlohmann::json loopClosureJson(const store::LoopClosureRecord& r) {
           {"query", body.at("query")},
           {"match", body.at("match")},
           // Closures stored before it was measured have none.
-          {"relative_pose", body.value("relative_pose", nlohmann::json(nullptr))}};
+          {"relative_pose", body.value("relative_pose", nlohmann::json(nullptr))},
+          {"withdrawn_ns", r.withdrawn_ns ? nlohmann::json(*r.withdrawn_ns) : nlohmann::json(nullptr)}};
 }
 
 }  // namespace rmap::app

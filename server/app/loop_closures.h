@@ -41,17 +41,21 @@ struct LoopClosure {
   /// closure measured it (geometry: the scan-to-submap match; laser-intensity panoramas: the
   /// 3D rigid fit; reflectivity patches: the 2D rigid fit of their pixels); unknown otherwise.
   std::optional<Eigen::Isometry3d> match_from_query;
+  /// The 2D pose graph dropped this closure, reported before, after later
+  /// closures showed it wrong: the sink withdraws the stored one.
+  bool withdrawn = false;
 };
 
-/// Takes accepted loop closures (store, viewers, metrics).
+/// Takes accepted loop closures and withdrawals (store, viewers, metrics).
 using LoopClosureSink = std::function<void(const LoopClosure&)>;
 
 /// The stored form; `detected_ns` is the wall clock of the detection.
 store::LoopClosureRecord toRecord(const LoopClosure& closure, int64_t detected_ns);
 /// JSON of a stored loop closure: id, map, source, score, detected_ns,
 /// query and match as {robot_id, stamp_ns, position [x,y,z] m, orientation [w,x,y,z]}
-/// (position and orientation null when the pose is unknown), and relative_pose
-/// {position, orientation} (match_from_query; null when not measured).
+/// (position and orientation null when the pose is unknown), relative_pose
+/// {position, orientation} (match_from_query; null when not measured), and
+/// withdrawn_ns (null while the closure holds).
 /// @throws nlohmann::json::exception when the stored body is not JSON
 nlohmann::json loopClosureJson(const store::LoopClosureRecord& record);
 

@@ -356,11 +356,14 @@ void MapWorker::applyScan(int64_t log_id, const v1::RobotMessage& message, const
   planar.in_map3d = !points.empty() && map_->grid().cellChecked(origin, origin_cell);
   planar_scans_[robot_id].push_back(planar);
   // Stored by the feed's thread: a durable write per closure would hold this worker's acks back.
-  for (const slam2d::LoopClosure2d& c : result->closures) {
+  // Accepted ones first: a closure can be accepted and withdrawn with one scan.
+  const auto post = [&](const slam2d::LoopClosure2d& c, bool withdrawn) {
     loop_feed_->post({name_, LoopSource::kGeometry, {c.query_trajectory, c.query_stamp_ns, slam2d::planarIsometry(c.query_pose)},
                       {c.match_trajectory, c.match_stamp_ns, slam2d::planarIsometry(c.match_pose)}, c.score,
-                      slam2d::planarIsometry(c.relative)});
-  }
+                      slam2d::planarIsometry(c.relative), withdrawn});
+  };
+  for (const slam2d::LoopClosure2d& c : result->closures) post(c, false);
+  for (const slam2d::LoopClosure2d& c : result->withdrawn_closures) post(c, true);
   if (!in_map3d) {
     if (planar.in_map3d) {
       map3d::InsertOptions options;

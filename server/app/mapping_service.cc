@@ -163,7 +163,7 @@ std::shared_ptr<MapWorker> MappingService::makeWorker(const store::MapRecord& re
       [this](const std::string& robot_id, const v1::PoseEstimate& estimate) { sendEstimate(robot_id, estimate); },
       first_input == slam_first_input_.end() ? 0 : first_input->second};
   const auto loop_first = loop_first_input_.find(record.name);
-  MapWorker::LoopInputs loop{recognizers_, [this](const LoopClosure& closure) { onLoopClosure(closure); },
+  MapWorker::LoopInputs loop{recognizers_, [this](const LoopClosure& closure) { recordLoopClosure(closure); },
                              loop_first == loop_first_input_.end() ? 0 : loop_first->second};
   auto worker =
       std::make_shared<MapWorker>(record.name, std::move(map), applied_id, config_, *store_, metrics_,
@@ -387,7 +387,18 @@ void MappingService::onPose(const RobotPose& pose) {
   viewers_.publishPose(pose);
 }
 
-void MappingService::onLoopClosure(const LoopClosure& closure) {
+void MappingService::recordLoopClosure(const LoopClosure& closure) {
+  if (closure.withdrawn) {
+    const std::optional<store::LoopClosureRecord> withdrawn = store_->withdrawLoopClosure(toRecord(closure, 0), nowNs());
+    if (!withdrawn) return;  // withdrawn before (a replay of the log), or never stored
+    metrics_.loop_closures_withdrawn.fetch_add(1, std::memory_order_relaxed);
+    spdlog::info("map {}: {} loop closure {} withdrawn: a later pose graph optimisation dropped it", closure.map,
+                 toString(closure.source), withdrawn->id);
+    nlohmann::json frame = loopClosureJson(*withdrawn);
+    frame["type"] = "loop_closure_withdrawn";
+    viewers_.publishEvent(closure.map, frame);
+    return;
+  }
   store::LoopClosureRecord record = toRecord(closure, nowNs());
   const std::optional<int64_t> id = store_->appendLoopClosure(record);
   if (!id) return;  // found again by a replay of the log

@@ -59,6 +59,10 @@ class MappingService {
   store::Store& store() { return *store_; }
   store::GroupCommitter& committer() { return *committer_; }
   ViewerHub& viewers() { return viewers_; }
+  /// Stores a loop closure found on a map (once: replays find it again) and pushes it to the
+  /// map's viewers; a withdrawn one is marked in the store and pushed as withdrawn (once). Every
+  /// map's place recognition and 2D SLAM deliver their closures here (on their feed's thread).
+  void recordLoopClosure(const LoopClosure& closure);
   /// limits.max_memory_bytes against this process's resident memory.
   MemoryBound& memoryBound() { return memory_bound_; }
 
@@ -113,8 +117,6 @@ class MappingService {
   void appliedDone(int64_t log_id);
   RobotStatus status(const store::RobotRecord& record) const;  ///< needs robots_mutex_
   void onPose(const RobotPose& pose);
-  /// Stores a loop closure found by a map (once: replays find it again) and pushes it to viewers.
-  void onLoopClosure(const LoopClosure& closure);
   void sendEstimate(const std::string& robot_id, const v1::PoseEstimate& estimate);
   /// Reads the robots' declared lasers and the maps' first SLAM and place recognition inputs
   /// from the store's events.

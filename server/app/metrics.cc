@@ -107,6 +107,9 @@ std::string renderPrometheus(const Metrics& m, const MetricsGauges& g) {
   metric(out, "rmap_loop_closures_refused_total", "counter",
          "Place matches refused: their measured relative pose contradicts the places' poses.",
          load(m.loop_closures_refused));
+  metric(out, "rmap_loop_closures_withdrawn_total", "counter",
+         "Stored loop closures withdrawn: a later 2D pose graph optimisation dropped them.",
+         load(m.loop_closures_withdrawn));
   metric(out, "rmap_trajectory_corrections_total", "counter",
          "2D pose graph optimisations applied to trajectories and maps.", load(m.trajectory_corrections));
   metric(out, "rmap_robot_connections", "gauge", "Open robot streams.", g.robot_connections);

@@ -53,6 +53,7 @@ struct Metrics {
   std::atomic<uint64_t> loop_frames_dropped{0};  ///< live frames dropped because place recognition was behind
   /// matches refused because their measured relative pose contradicts the places' poses
   std::atomic<uint64_t> loop_closures_refused{0};
+  std::atomic<uint64_t> loop_closures_withdrawn{0};  ///< stored closures a later 2D pose graph optimisation dropped
   std::atomic<uint64_t> trajectory_corrections{0};  ///< 2D pose graph optimisations applied to trajectories and maps
   LatencyHistogram ack_latency;      ///< frame received → ack queued
   LatencyHistogram apply_latency;    ///< one message applied to its map

@@ -83,6 +83,7 @@ std::optional<Slam2dResult> Slam2dLayer::addScan(const std::string& robot_id, co
     const uint64_t graph_version = slam_.graphVersion();
     result.base_pose = slam_.addScan(robot_id, result.scan, odometry);
     result.closures = slam_.takeLoopClosures();
+    result.withdrawn_closures = slam_.takeWithdrawnLoopClosures();
     result.graph_changed = slam_.graphVersion() != graph_version;
     version_.store(slam_.version());
   } catch (const std::invalid_argument& e) {

@@ -35,6 +35,8 @@ struct Slam2dResult {
   slam2d::Pose2 sensor_pose;  ///< laser in the map frame
   slam2d::LaserScan scan;     ///< the scan as the SLAM took it (sensor frame)
   std::vector<slam2d::LoopClosure2d> closures;  ///< geometric loop closures accepted with this scan
+  /// Accepted geometric closures this scan's optimisation dropped (after `closures`: one may be in both).
+  std::vector<slam2d::LoopClosure2d> withdrawn_closures;
   /// The pose graph moved poses: trajectory() and the grid are corrected.
   bool graph_changed = false;
 };

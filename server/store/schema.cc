@@ -86,8 +86,11 @@ CREATE TABLE loop_closures (
 CREATE INDEX loop_closures_by_map ON loop_closures (map, id);
 )sql";
 
-/// Tables added by each version, in order: a database at version v gets those after v.
-constexpr const char* kMigrations[] = {kVersion1Tables, kVersion2Tables};
+// Version 3: a loop closure the 2D pose graph dropped after reporting it is kept, marked withdrawn.
+constexpr const char* kVersion3Columns = "ALTER TABLE loop_closures ADD COLUMN withdrawn_ns INTEGER;";
+
+/// Tables and columns added by each version, in order: a database at version v gets those after v.
+constexpr const char* kMigrations[] = {kVersion1Tables, kVersion2Tables, kVersion3Columns};
 static_assert(std::size(kMigrations) == kSchemaVersion);
 
 int userVersion(Connection& connection) {

@@ -8,7 +8,7 @@
 namespace rmap::store {
 
 /// Version of the schema this build reads and writes.
-inline constexpr int kSchemaVersion = 2;
+inline constexpr int kSchemaVersion = 3;
 
 /// Creates the tables in a new database, upgrades an older one in place, or
 /// checks that an existing one has a schema this build understands.

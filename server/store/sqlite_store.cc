@@ -78,11 +78,35 @@ constexpr std::string_view kEventsOfAllMaps =
 constexpr std::string_view kInsertLoopClosure =
     "INSERT INTO loop_closures (map, source, query_robot, query_stamp_ns, match_robot, match_stamp_ns, detected_ns, "
     "json) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8) ON CONFLICT DO NOTHING";
+#define RMAP_LOOP_CLOSURE_COLUMNS \
+  "id, map, source, query_robot, query_stamp_ns, match_robot, match_stamp_ns, detected_ns, json, withdrawn_ns "
 // Empty filter values match everything; the robot is on either side.
 constexpr std::string_view kLoopClosures =
-    "SELECT id, map, source, query_robot, query_stamp_ns, match_robot, match_stamp_ns, detected_ns, json "
+    "SELECT " RMAP_LOOP_CLOSURE_COLUMNS
     "FROM loop_closures WHERE (?1 = '' OR map = ?1) AND (?2 = '' OR query_robot = ?2 OR match_robot = ?2) "
     "AND (?3 = '' OR source = ?3) AND id > ?4 ORDER BY id LIMIT ?5";
+constexpr std::string_view kWithdrawLoopClosure =
+    "UPDATE loop_closures SET withdrawn_ns = ?7 WHERE map = ?1 AND source = ?2 AND query_robot = ?3 "
+    "AND query_stamp_ns = ?4 AND match_robot = ?5 AND match_stamp_ns = ?6 AND withdrawn_ns IS NULL "
+    "RETURNING " RMAP_LOOP_CLOSURE_COLUMNS;
+#undef RMAP_LOOP_CLOSURE_COLUMNS
+
+/// Binds what makes a loop closure unique (?1 map … ?6 match_stamp_ns); the strings must outlive the statement's run.
+void bindLoopClosureKey(Statement& statement, const LoopClosureRecord& c) {
+  statement.bindText(1, c.map);
+  statement.bindText(2, c.source);
+  statement.bindText(3, c.query_robot);
+  statement.bind(4, c.query_stamp_ns);
+  statement.bindText(5, c.match_robot);
+  statement.bind(6, c.match_stamp_ns);
+}
+
+/// The loop closure in the current row of a statement that selected the columns above.
+LoopClosureRecord loopClosureAt(const Statement& row) {
+  return {row.int64At(0), std::string(row.textAt(1)), std::string(row.textAt(2)), std::string(row.textAt(3)),
+          row.int64At(4), std::string(row.textAt(5)), row.int64At(6), row.int64At(7), std::string(row.textAt(8)),
+          row.isNull(9) ? std::nullopt : std::optional<int64_t>(row.int64At(9))};
+}
 
 constexpr std::string_view kPutSnapshot =
     "INSERT INTO snapshots (map, last_message_id, blob) VALUES (?1, ?2, ?3) "
@@ -331,17 +355,23 @@ class SqliteStore final : public Store {
   std::optional<int64_t> appendLoopClosure(const LoopClosureRecord& c) override {
     auto lock = write_gate_.lockWriter();
     Statement insert(writer_, kInsertLoopClosure, "append loop closure");
-    insert.bindText(1, c.map);
-    insert.bindText(2, c.source);
-    insert.bindText(3, c.query_robot);
-    insert.bind(4, c.query_stamp_ns);
-    insert.bindText(5, c.match_robot);
-    insert.bind(6, c.match_stamp_ns);
+    bindLoopClosureKey(insert, c);
     insert.bind(7, c.detected_ns);
     insert.bindText(8, c.json);
     insert.step();
     if (sqlite3_changes(writer_.handle()) == 0) return std::nullopt;
     return sqlite3_last_insert_rowid(writer_.handle());
+  }
+
+  std::optional<LoopClosureRecord> withdrawLoopClosure(const LoopClosureRecord& c, int64_t withdrawn_ns) override {
+    auto lock = write_gate_.lockWriter();
+    Statement update(writer_, kWithdrawLoopClosure, "withdraw loop closure");
+    bindLoopClosureKey(update, c);
+    update.bind(7, withdrawn_ns);
+    if (!update.step()) return std::nullopt;
+    LoopClosureRecord withdrawn = loopClosureAt(update);
+    while (update.step()) {}  // RETURNING: the update completes when the statement is run to its end
+    return withdrawn;
   }
 
   std::vector<LoopClosureRecord> loopClosures(const LoopClosureFilter& filter) const override {
@@ -353,11 +383,7 @@ class SqliteStore final : public Store {
     query.bind(4, filter.after_id);
     query.bind(5, sqlLimit(filter.limit));
     std::vector<LoopClosureRecord> out;
-    while (query.step()) {
-      out.push_back({query.int64At(0), std::string(query.textAt(1)), std::string(query.textAt(2)),
-                     std::string(query.textAt(3)), query.int64At(4), std::string(query.textAt(5)),
-                     query.int64At(6), query.int64At(7), std::string(query.textAt(8))});
-    }
+    while (query.step()) out.push_back(loopClosureAt(query));
     return out;
   }
 

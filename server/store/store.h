@@ -115,6 +115,9 @@ struct LoopClosureRecord {
   int64_t match_stamp_ns = 0;
   int64_t detected_ns = 0;  ///< wall clock of the first detection
   std::string json;         ///< body, opaque here
+  /// Wall clock when the map stopped resting on it (a later optimisation of
+  /// the 2D pose graph dropped it); none while it holds.
+  std::optional<int64_t> withdrawn_ns;
 };
 
 /// Which loop closures to read; empty strings match everything.
@@ -178,6 +181,12 @@ class Store {
   /// log finds the same closures again). Durable on return.
   /// @return its id; nullopt when it was stored before (nothing written)
   virtual std::optional<int64_t> appendLoopClosure(const LoopClosureRecord& closure) = 0;
+  /// Marks the stored closure with `closure`'s map, source, robots and stamps
+  /// withdrawn at `withdrawn_ns` (it keeps its id and body).
+  /// @return the stored closure, withdrawn; nullopt when none is stored or it
+  ///         was withdrawn before (a replay of the log withdraws it again)
+  virtual std::optional<LoopClosureRecord> withdrawLoopClosure(const LoopClosureRecord& closure,
+                                                               int64_t withdrawn_ns) = 0;
   /// Loop closures matching `filter` with id > after_id, in id order, at most `limit`.
   virtual std::vector<LoopClosureRecord> loopClosures(const LoopClosureFilter& filter) const = 0;
 

@@ -116,4 +116,68 @@ describe('loop closures in the viewer', { timeout: 200000 }, () => {
       await context.close();
     }
   });
+
+  // rmapd pushes `loop_closure_withdrawn` when the 2D pose graph drops a closure it reported
+  // (docs/API.md §6.10, §8; tests/unit/app/mapping_service_test.cc); the simulated run has no
+  // such closure, so the test forwards the real stream and adds one frame for a listed closure.
+  test('a withdrawn loop closure stays listed, struck through, and is no longer drawn', async () => {
+    const streams = [];  // every viewer stream the page opened (it reconnects after errors)
+    const { context, page, record } = await openViewerPage(browser, `${server.url}/?map=sim`, {
+      beforeGoto: (p) => p.routeWebSocket(/\/v1\/stream\/viewer/, (ws) => {
+        ws.connectToServer();  // without handlers both ways are forwarded as they are
+        streams.push(ws);
+      }),
+    });
+    try {
+      const hook = (fn, arg) => page.evaluate(`(${fn.toString()})(window.rmapViewer, ${JSON.stringify(arg)})`);
+      // The viewer's state and its page at one instant: closures arrive several a second, and each
+      // one rebuilds the list (the newest 200) and the lines.
+      const view = (v, id) => {
+        const li = [...document.querySelectorAll('#loops li')]
+          .find((l) => l.querySelector('.name').textContent.startsWith(`#${id} `));
+        const held = v.loopClosures().filter((e) => e.source === 'geometry' && e.query.position && e.match.position
+          && e.withdrawn_ns == null);
+        return {
+          listed: !!li,
+          struck: li ? getComputedStyle(li).textDecorationLine : null,
+          title: li ? li.title : null,
+          classes: li ? [...li.classList] : [],
+          event: v.loopClosures().find((e) => e.id === id) || null,
+          heldIds: held.map((e) => e.id),
+          lines: v.loopLines()['#4dd0ff'] || 0,  // geometry's colour (LOOP_COLORS)
+        };
+      };
+      let target;
+      await waitFor('a listed geometry closure that is drawn', async () => {
+        target = await hook((v) => {
+          const byId = new Map(v.loopClosures().map((e) => [e.id, e]));
+          return [...document.querySelectorAll('#loops li .name')]
+            .map((n) => byId.get(Number(/^#(\d+)/.exec(n.textContent)[1])))
+            .find((e) => e && e.source === 'geometry' && e.query.position && e.match.position) || null;
+        });
+        return target !== null;
+      }, { timeout: 30000 });
+      const before = await hook(view, target.id);
+      assert.equal(before.lines, before.heldIds.length, 'every held geometry closure is drawn');
+      assert.ok(before.heldIds.includes(target.id));
+      assert.ok(streams.length > 0, 'the viewer stream was not routed');
+      const withdrawnNs = Date.now() * 1e6;
+      const frame = JSON.stringify({ ...target, type: 'loop_closure_withdrawn', withdrawn_ns: withdrawnNs });
+      for (const ws of streams) ws.send(frame);
+      let after;
+      await waitFor(`closure ${target.id} withdrawn in the viewer`, async () => {
+        after = await hook(view, target.id);
+        return after.event?.withdrawn_ns === withdrawnNs && after.listed;
+      }, { timeout: 10000 });
+      assert.ok(after.classes.includes('withdrawn'), JSON.stringify(after.classes));
+      assert.equal(after.struck, 'line-through');
+      assert.match(after.title, /withdrawn/);
+      assert.ok(!after.heldIds.includes(target.id));
+      assert.equal(after.lines, after.heldIds.length, 'the withdrawn closure is still drawn');
+      log(`closure ${target.id} withdrawn: ${before.lines} geometry lines before, ${after.lines} after`);
+      assert.deepEqual(record.pageErrors, []);
+    } finally {
+      await context.close();
+    }
+  });
 });

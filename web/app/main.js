@@ -171,6 +171,9 @@ function handleFrame(frame) {
     case 'loop_closure':
       if (frame.map === state.map) addLoopClosures([frame], true);
       break;
+    case 'loop_closure_withdrawn':
+      if (frame.map === state.map) withdrawLoopClosure(frame);
+      break;
     default:  // hello, and frame types of later servers
       break;
   }
@@ -421,14 +424,15 @@ $('show-robots').addEventListener('change', (e) => renderer.setRobotsVisible(e.t
 // ----- loop closures -----
 
 // Closures as docs/API.md §6.10 gives them (the stream's frames add "type"): the two places'
-// positions, null when a place's pose is unknown.
+// positions, null when a place's pose is unknown; a withdrawn one (withdrawn_ns set: the pose
+// graph dropped it) stays listed, struck through, and is not drawn.
 function addLoopClosures(events, fresh) {
   let changed = false;
   for (const e of events) {
     if (state.loopIds.has(e.id)) continue;
     state.loopIds.add(e.id);
     state.loops.push({ id: e.id, event: e, a: e.query?.position ?? null, b: e.match?.position ?? null,
-      source: e.source, fresh, at: Date.now() });
+      source: e.source, fresh, withdrawn: e.withdrawn_ns != null, at: Date.now() });
     changed = true;
   }
   if (!changed) return;
@@ -443,6 +447,19 @@ function addLoopClosures(events, fresh) {
   }
 }
 
+// The pose graph dropped a closure it had reported: its trajectories moved again.
+function withdrawLoopClosure(e) {
+  const lc = state.loops.find((l) => l.id === e.id);
+  if (!lc) {
+    addLoopClosures([e], false);
+  } else {
+    lc.event = e;
+    lc.withdrawn = true;
+    renderLoops();
+  }
+  reloadTrajectoriesOf([e.query?.robot_id, e.match?.robot_id]);
+}
+
 // A closure's measured relative pose (docs/API.md §6.10) as its distance and turn, or '' when
 // the closure measured none.
 function measuredOffsetText(relative) {
@@ -453,10 +470,14 @@ function measuredOffsetText(relative) {
 }
 
 function renderLoops() {
-  renderer.setLoopClosures(state.loops.filter((lc) => lc.a && lc.b));
+  renderer.setLoopClosures(state.loops.filter((lc) => lc.a && lc.b && !lc.withdrawn));
   const items = state.loops.slice(-200).reverse().map((lc) => {
     const li = document.createElement('li');
     if (lc.fresh) li.classList.add('fresh');
+    if (lc.withdrawn) {
+      li.classList.add('withdrawn');
+      li.title = 'withdrawn: a later pose graph optimisation dropped it';
+    }
     const name = document.createElement('span');
     name.className = 'name';
     const robots = [lc.event.query?.robot_id, lc.event.match?.robot_id].filter(Boolean).join(' ↔ ');

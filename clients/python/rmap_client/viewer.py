@@ -2,7 +2,8 @@
 
 The server pushes JSON text frames: ``hello`` once, then ``tiles`` (changed
 map tiles with their versions), ``poses`` (latest robot poses),
-``loop_closure`` and ``resync`` (frames were skipped: re-read the state over HTTP).
+``loop_closure``, ``loop_closure_withdrawn`` (the 2D pose graph dropped a stored
+closure) and ``resync`` (frames were skipped: re-read the state over HTTP).
 """
 
 from __future__ import annotations

@@ -179,7 +179,7 @@ export async function launchBrowser() {
  * (page.route for HTTP, the websocket event for WebSockets), as are console errors and CSP
  * violations.
  */
-export async function openViewerPage(browser, url, { width = 1280, height = 800 } = {}) {
+export async function openViewerPage(browser, url, { width = 1280, height = 800, beforeGoto = null } = {}) {
   const context = await browser.newContext({ viewport: { width, height } });
   const page = await context.newPage();
   const record = { foreign: [], requests: 0, paths: [], consoleErrors: [], pageErrors: [], websockets: [] };
@@ -199,6 +199,7 @@ export async function openViewerPage(browser, url, { width = 1280, height = 800 
   });
   page.on('console', (msg) => { if (msg.type() === 'error') record.consoleErrors.push(msg.text()); });
   page.on('pageerror', (e) => record.pageErrors.push(String(e)));
+  if (beforeGoto) await beforeGoto(page);  // e.g. page.routeWebSocket, which must precede the page's sockets
   await page.goto(url, { waitUntil: 'load' });
   return { context, page, record };
 }

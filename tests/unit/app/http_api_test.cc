@@ -114,6 +114,15 @@ TEST_F(HttpApiTest, LoopClosuresAreFilteredByMapRobotSourceAndCursor) {
   EXPECT_EQ(first.at("query").at("orientation"), json::parse("[1.0, 0.0, 0.0, 0.0]"));
   EXPECT_EQ(first.at("match").at("robot_id"), "r2");
   EXPECT_EQ(first.at("match").at("stamp_ns"), 95);
+  EXPECT_TRUE(first.at("withdrawn_ns").is_null());
+
+  // A closure the 2D pose graph dropped is still listed, with the time it was withdrawn.
+  const std::vector<store::LoopClosureRecord> geometry = store.loopClosures({"lab", "", "geometry", 0, 10});
+  ASSERT_EQ(geometry.size(), 1u);
+  ASSERT_TRUE(store.withdrawLoopClosure(geometry[0], 77));
+  const json withdrawn = json::parse(get("/v1/loop-closures?source=geometry").body()).at("loop_closures").at(0);
+  EXPECT_EQ(withdrawn.at("id"), b);
+  EXPECT_EQ(withdrawn.at("withdrawn_ns"), 77);
 }
 
 TEST_F(HttpApiTest, LoopClosureQueriesWithBadParametersAreRefused) {

@@ -204,6 +204,48 @@ TEST(MappingService, CameraLoopClosuresAreStoredOnceAcrossReplaysOfTheLog) {
   }
 }
 
+// The 2D pose graph can drop a closure it reported once later closures show it
+// wrong: the stored one is marked withdrawn, once, and its viewers are told.
+TEST(MappingService, AWithdrawnGeometryClosureIsMarkedInTheStoreAndPushedOnce) {
+  store::TempDir dir;
+  MappingService service(testing::configIn(dir.path()));
+  service.openMap("lab", 0.0);
+  auto viewer = std::make_shared<ViewerSession>(service.viewers(), "lab");
+  auto connection = std::make_shared<testing::ViewerConnection>();
+  viewer->onOpen(connection);
+  connection->frames.clear();  // hello
+
+  LoopClosure closure{"lab", LoopSource::kGeometry, {"bot", 2000, Eigen::Isometry3d::Identity()},
+                      {"bot", 1000, Eigen::Isometry3d::Identity()}, 0.7, Eigen::Isometry3d::Identity()};
+  service.recordLoopClosure(closure);
+  closure.withdrawn = true;
+  service.recordLoopClosure(closure);
+  service.recordLoopClosure(closure);  // a replay of the log withdraws it again: nothing changes
+
+  const std::vector<store::LoopClosureRecord> stored = service.store().loopClosures({"lab", "", "", 0, 100});
+  ASSERT_EQ(stored.size(), 1u);
+  ASSERT_TRUE(stored[0].withdrawn_ns);
+  EXPECT_GE(*stored[0].withdrawn_ns, stored[0].detected_ns);
+  EXPECT_EQ(service.metrics().loop_closures[static_cast<size_t>(LoopSource::kGeometry)].load(), 1u);
+  EXPECT_EQ(service.metrics().loop_closures_withdrawn.load(), 1u);
+  ASSERT_EQ(connection->frames.size(), 2u);
+  EXPECT_EQ(connection->frames[0]["type"], "loop_closure");
+  EXPECT_TRUE(connection->frames[0]["withdrawn_ns"].is_null());
+  const nlohmann::json& withdrawn = connection->frames[1];
+  EXPECT_EQ(withdrawn["type"], "loop_closure_withdrawn");
+  EXPECT_EQ(withdrawn["id"], connection->frames[0]["id"]);
+  EXPECT_EQ(withdrawn["withdrawn_ns"], *stored[0].withdrawn_ns);
+  EXPECT_EQ(withdrawn["query"]["stamp_ns"], 2000);
+
+  // A closure never stored is not withdrawn.
+  LoopClosure other = closure;
+  other.query.stamp_ns = 3000;
+  service.recordLoopClosure(other);
+  EXPECT_EQ(service.metrics().loop_closures_withdrawn.load(), 1u);
+  EXPECT_EQ(connection->frames.size(), 2u);
+  viewer->onClose();
+}
+
 TEST(MappingService, GaugesReadTheConnectionCounter) {
   store::TempDir dir;
   MappingService service(testing::configIn(dir.path()));

@@ -152,7 +152,7 @@ TEST(RenderPrometheus, EveryMetricHasOneHelpAndOneTypeLine) {
   for (size_t at = out.find("# HELP "); at != std::string::npos; at = out.find("# HELP ", at + 1)) ++help;
   for (size_t at = out.find("# TYPE "); at != std::string::npos; at = out.find("# TYPE ", at + 1)) ++type;
   EXPECT_EQ(help, type);
-  EXPECT_EQ(help, 24u + 15u + 7u);  // counters, gauges, histograms
+  EXPECT_EQ(help, 25u + 15u + 7u);  // counters, gauges, histograms
 }
 
 }  // namespace

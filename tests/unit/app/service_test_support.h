@@ -1,8 +1,8 @@
 #pragma once
 /// @file service_test_support.h
 /// What the tests of the units around MappingService share: a service over a
-/// fresh data directory, robot messages and a WebSocket connection that
-/// records what a session sends.
+/// fresh data directory, robot messages and WebSocket connections that
+/// record what a robot's or a viewer's session sends.
 
 #include <gtest/gtest.h>
 
@@ -11,6 +11,7 @@
 #include <condition_variable>
 #include <memory>
 #include <mutex>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
@@ -91,6 +92,29 @@ class RecordingConnection : public net::WsConnection {
   mutable std::condition_variable changed_;
   std::vector<v1::ServerMessage> sent_;
   net::Peer peer_{"127.0.0.1", 40000, true};
+};
+
+/// A viewer's WebSocket: records the JSON frames sent; queuedBytes and
+/// whether send succeeds are set by the test. Not thread-safe.
+class ViewerConnection : public net::WsConnection {
+ public:
+  bool send(std::string data, bool binary) override {
+    EXPECT_FALSE(binary);
+    if (!accept) return false;
+    frames.push_back(nlohmann::json::parse(data));
+    return true;
+  }
+  size_t queuedBytes() const override { return queued; }
+  void pauseReading(bool) override {}
+  void close(uint16_t, const std::string&) override {}
+  const net::Peer& peer() const override { return peer_; }
+
+  std::vector<nlohmann::json> frames;
+  size_t queued = 0;
+  bool accept = true;
+
+ private:
+  net::Peer peer_{"127.0.0.1", 1, true};
 };
 
 }  // namespace rmap::app::testing

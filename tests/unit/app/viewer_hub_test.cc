@@ -6,32 +6,12 @@
 #include <string>
 #include <vector>
 
+#include "service_test_support.h"
+
 namespace rmap::app {
 namespace {
 
 using nlohmann::json;
-
-/// Records the frames sent; queuedBytes and whether send succeeds are set by the test.
-class FakeConnection : public net::WsConnection {
- public:
-  bool send(std::string data, bool binary) override {
-    EXPECT_FALSE(binary);
-    if (!accept) return false;
-    frames.push_back(json::parse(data));
-    return true;
-  }
-  size_t queuedBytes() const override { return queued; }
-  void pauseReading(bool) override {}
-  void close(uint16_t, const std::string&) override {}
-  const net::Peer& peer() const override { return peer_; }
-
-  std::vector<json> frames;
-  size_t queued = 0;
-  bool accept = true;
-
- private:
-  net::Peer peer_{"127.0.0.1", 1, true};
-};
 
 /// A store that keeps nothing: enough for a MapWorker that is never started.
 class NullStore : public store::Store {
@@ -52,6 +32,9 @@ class NullStore : public store::Store {
   int64_t appendEvent(const store::EventRecord&) override { return 1; }
   std::vector<store::EventRecord> events(const std::string&, int64_t, size_t) const override { return {}; }
   std::optional<int64_t> appendLoopClosure(const store::LoopClosureRecord&) override { return 1; }
+  std::optional<store::LoopClosureRecord> withdrawLoopClosure(const store::LoopClosureRecord&, int64_t) override {
+    return std::nullopt;
+  }
   std::vector<store::LoopClosureRecord> loopClosures(const store::LoopClosureFilter&) const override { return {}; }
   void putSnapshot(const store::Snapshot&) override {}
   std::optional<store::Snapshot> snapshot(const std::string&) const override { return std::nullopt; }
@@ -59,7 +42,7 @@ class NullStore : public store::Store {
 
 struct Viewer {
   std::shared_ptr<ViewerSession> session;
-  std::shared_ptr<FakeConnection> connection;
+  std::shared_ptr<testing::ViewerConnection> connection;
 };
 
 class ViewerHubTest : public ::testing::Test {
@@ -68,7 +51,7 @@ class ViewerHubTest : public ::testing::Test {
 
   /// Opens a viewer of `map` and drops its hello frame.
   Viewer open(const std::string& map) {
-    Viewer v{std::make_shared<ViewerSession>(hub_, map), std::make_shared<FakeConnection>()};
+    Viewer v{std::make_shared<ViewerSession>(hub_, map), std::make_shared<testing::ViewerConnection>()};
     v.session->onOpen(v.connection);
     EXPECT_EQ(v.connection->frames.size(), 1u);
     v.connection->frames.clear();
@@ -87,7 +70,7 @@ class ViewerHubTest : public ::testing::Test {
 
 TEST_F(ViewerHubTest, OpenSendsHelloAndRegistersCloseUnregisters) {
   auto session = std::make_shared<ViewerSession>(hub_, "lab");
-  auto connection = std::make_shared<FakeConnection>();
+  auto connection = std::make_shared<testing::ViewerConnection>();
   session->onOpen(connection);
   ASSERT_EQ(connection->frames.size(), 1u);
   EXPECT_EQ(connection->frames[0], (json{{"type", "hello"}, {"map", "lab"}}));

@@ -63,6 +63,9 @@ class GatedStore final : public Store {
   int64_t appendEvent(const EventRecord&) override { return 0; }
   std::vector<EventRecord> events(const std::string&, int64_t, size_t) const override { return {}; }
   std::optional<int64_t> appendLoopClosure(const LoopClosureRecord&) override { return std::nullopt; }
+  std::optional<LoopClosureRecord> withdrawLoopClosure(const LoopClosureRecord&, int64_t) override {
+    return std::nullopt;
+  }
   std::vector<LoopClosureRecord> loopClosures(const LoopClosureFilter&) const override { return {}; }
   void putSnapshot(const Snapshot&) override {}
   std::optional<Snapshot> snapshot(const std::string&) const override { return std::nullopt; }

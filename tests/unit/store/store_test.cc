@@ -8,6 +8,7 @@
 #include <future>
 #include <thread>
 
+#include "store/schema.h"
 #include "temp_dir.h"
 
 namespace rmap::store {
@@ -83,7 +84,7 @@ TEST(Store, OpenCreatesDataDirAndWalDatabaseWithSchemaVersion) {
   { const auto store = Store::open(data_dir); }
   ASSERT_TRUE(std::filesystem::exists(data_dir / "rmap.db"));
   EXPECT_EQ(queryDirectly(data_dir / "rmap.db", "PRAGMA journal_mode"), "wal");
-  EXPECT_EQ(queryDirectly(data_dir / "rmap.db", "PRAGMA user_version"), "2");
+  EXPECT_EQ(queryDirectly(data_dir / "rmap.db", "PRAGMA user_version"), std::to_string(kSchemaVersion));
 }
 
 TEST(Store, MessagesRoundTripWithIncreasingIds) {
@@ -391,16 +392,17 @@ TEST(Store, UncreatableDataDirGivesErrorNamingIt) {
 TEST(Store, NewerSchemaVersionIsRefused) {
   TempDir tmp;
   { Store::open(tmp.path()); }
-  queryDirectly(tmp.path() / "rmap.db", "PRAGMA user_version = 3");
-  ASSERT_EQ(queryDirectly(tmp.path() / "rmap.db", "PRAGMA user_version"), "3");
+  const std::string newer = std::to_string(kSchemaVersion + 1);
+  queryDirectly(tmp.path() / "rmap.db", "PRAGMA user_version = " + newer);
+  ASSERT_EQ(queryDirectly(tmp.path() / "rmap.db", "PRAGMA user_version"), newer);
   const std::string error = storeErrorOf([&] { Store::open(tmp.path()); });
-  EXPECT_NE(error.find("schema version 3"), std::string::npos) << error;
+  EXPECT_NE(error.find("schema version " + newer), std::string::npos) << error;
   EXPECT_NE(error.find((tmp.path() / "rmap.db").string()), std::string::npos) << error;
 }
 
 LoopClosureRecord closure(const std::string& map, const std::string& source, const std::string& query_robot,
                           int64_t query_stamp_ns, const std::string& match_robot, int64_t match_stamp_ns) {
-  return {0, map, source, query_robot, query_stamp_ns, match_robot, match_stamp_ns, 99, R"({"score":0.5})"};
+  return {0, map, source, query_robot, query_stamp_ns, match_robot, match_stamp_ns, 99, R"({"score":0.5})", std::nullopt};
 }
 
 LoopClosureFilter filter(std::string map = "", std::string robot = "", std::string source = "", int64_t after_id = 0,
@@ -462,10 +464,56 @@ TEST(Store, VersionOneDatabaseGainsTheLoopClosureTableAndKeepsItsData) {
   queryDirectly(tmp.path() / "rmap.db", "DROP TABLE loop_closures");
   queryDirectly(tmp.path() / "rmap.db", "PRAGMA user_version = 1");
   auto store = Store::open(tmp.path());
-  EXPECT_EQ(queryDirectly(tmp.path() / "rmap.db", "PRAGMA user_version"), "2");
+  EXPECT_EQ(queryDirectly(tmp.path() / "rmap.db", "PRAGMA user_version"), std::to_string(kSchemaVersion));
   EXPECT_EQ(store->messageCount(), 1u);
   EXPECT_TRUE(store->appendLoopClosure(closure("hall", "camera", "r1", 10, "r1", 5)));
   EXPECT_EQ(store->loopClosures(filter()).size(), 1u);
+}
+
+// A 2D pose graph can drop a closure it reported: the store keeps it, marked.
+TEST(Store, AWithdrawnLoopClosureKeepsItsIdAndBodyAndIsMarkedOnce) {
+  TempDir tmp;
+  auto store = Store::open(tmp.path());
+  const std::optional<int64_t> a = store->appendLoopClosure(closure("hall", "geometry", "r1", 10, "r2", 5));
+  const std::optional<int64_t> b = store->appendLoopClosure(closure("hall", "geometry", "r1", 11, "r2", 5));
+  ASSERT_TRUE(a && b);
+  const std::optional<LoopClosureRecord> withdrawn =
+      store->withdrawLoopClosure(closure("hall", "geometry", "r1", 10, "r2", 5), 1234);
+  ASSERT_TRUE(withdrawn);
+  EXPECT_EQ(withdrawn->id, *a);
+  EXPECT_EQ(withdrawn->json, R"({"score":0.5})");
+  EXPECT_EQ(withdrawn->withdrawn_ns, 1234);
+  // Once: a replay of the log withdraws it again; and only a stored closure.
+  EXPECT_FALSE(store->withdrawLoopClosure(closure("hall", "geometry", "r1", 10, "r2", 5), 5678));
+  EXPECT_FALSE(store->withdrawLoopClosure(closure("hall", "camera", "r1", 10, "r2", 5), 5678));
+  EXPECT_FALSE(store->withdrawLoopClosure(closure("yard", "geometry", "r1", 10, "r2", 5), 5678));
+  const auto check = [&] {
+    const std::vector<LoopClosureRecord> read = store->loopClosures(filter());
+    ASSERT_EQ(read.size(), 2u);
+    EXPECT_EQ(read[0].withdrawn_ns, 1234);
+    EXPECT_FALSE(read[1].withdrawn_ns);
+  };
+  check();
+  store.reset();  // durable
+  store = Store::open(tmp.path());
+  check();
+}
+
+TEST(Store, VersionTwoDatabaseGainsTheWithdrawnColumnAndKeepsItsClosures) {
+  TempDir tmp;
+  {
+    auto store = Store::open(tmp.path());
+    ASSERT_TRUE(store->appendLoopClosure(closure("hall", "geometry", "r1", 10, "r1", 5)));
+  }
+  // What a version-2 rmapd left behind.
+  queryDirectly(tmp.path() / "rmap.db", "ALTER TABLE loop_closures DROP COLUMN withdrawn_ns");
+  queryDirectly(tmp.path() / "rmap.db", "PRAGMA user_version = 2");
+  auto store = Store::open(tmp.path());
+  EXPECT_EQ(queryDirectly(tmp.path() / "rmap.db", "PRAGMA user_version"), std::to_string(kSchemaVersion));
+  const std::vector<LoopClosureRecord> read = store->loopClosures(filter());
+  ASSERT_EQ(read.size(), 1u);
+  EXPECT_FALSE(read[0].withdrawn_ns);
+  EXPECT_TRUE(store->withdrawLoopClosure(closure("hall", "geometry", "r1", 10, "r1", 5), 7));
 }
 
 TEST(Store, FileThatIsNoDatabaseIsRefused) {
