@@ -3,7 +3,11 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <functional>
+#include <numbers>
 #include <tuple>
+
+#include <Eigen/Geometry>
 
 namespace rmap::bench {
 
@@ -113,6 +117,85 @@ json judgeClosures(const std::vector<slam2d::LoopClosure2d>& closures,
           {"closures_judged_by_all", several ? json(judged_by_all) : json(nullptr)},
           {"false_by_all_judges", several ? json(wrong_by_all) : json(nullptr)},
           {"list", list}};
+}
+
+namespace {
+
+/// The planar rigid motion that brings poses `from[i]` onto `to[i]`: the
+/// median heading difference (robust to a few bad poses), then the mean offset.
+struct PlanarAlignment {
+  double rotation_rad = 0.0;
+  Eigen::Vector2d translation = Eigen::Vector2d::Zero();
+
+  PlanarAlignment(const std::vector<Pose2>& from, const std::vector<Pose2>& to) {
+    if (from.empty()) return;
+    // Median of the differences about the first one, so wrapping at ±π does not split them.
+    const double pivot = slam2d::normalizeAngle(to[0].theta_rad - from[0].theta_rad);
+    std::vector<double> d;
+    for (size_t i = 0; i < from.size(); ++i)
+      d.push_back(slam2d::normalizeAngle(to[i].theta_rad - from[i].theta_rad - pivot));
+    std::nth_element(d.begin(), d.begin() + static_cast<std::ptrdiff_t>(d.size() / 2), d.end());
+    rotation_rad = slam2d::normalizeAngle(pivot + d[d.size() / 2]);
+    const Eigen::Rotation2Dd r(rotation_rad);
+    for (size_t i = 0; i < from.size(); ++i) translation += to[i].translation() - r * from[i].translation();
+    translation /= double(from.size());
+  }
+  /// Heading of `to` minus heading of `from` brought over (rad, wrapped).
+  double headingDiff(const Pose2& from, const Pose2& to) const {
+    return slam2d::normalizeAngle(to.theta_rad - from.theta_rad - rotation_rad);
+  }
+  double positionDiff(const Pose2& from, const Pose2& to) const {
+    return (to.translation() - (Eigen::Rotation2Dd(rotation_rad) * from.translation() + translation)).norm();
+  }
+};
+
+/// The estimate brought onto a judge over every scan the judge holds.
+PlanarAlignment estimateOnto(const JudgedRun& run, const ClosureJudge& judge) {
+  std::vector<Pose2> from, to;
+  for (size_t i = 0; i < judge.reference.size() && i < run.laser_poses.size(); ++i) {
+    if (!judge.reference[i]) continue;
+    from.push_back(run.laser_poses[i]);
+    to.push_back(*judge.reference[i]);
+  }
+  return {from, to};
+}
+
+}  // namespace
+
+json judgesAgreement(const JudgedRun& run, const ClosureJudge& first, const ClosureJudge& other, size_t worst) {
+  std::vector<size_t> common;
+  std::vector<Pose2> from, to;
+  for (size_t i = 0; i < first.reference.size() && i < other.reference.size(); ++i) {
+    if (!first.reference[i] || !other.reference[i]) continue;
+    common.push_back(i);
+    from.push_back(*other.reference[i]);
+    to.push_back(*first.reference[i]);
+  }
+  json out = {{"common_scans", common.size()}};
+  if (common.empty()) return out;
+  const PlanarAlignment judges(from, to);
+  const PlanarAlignment onto_first = estimateOnto(run, first), onto_other = estimateOnto(run, other);
+  std::vector<std::pair<double, size_t>> by_heading;  // |heading difference| rad, position in `common`
+  for (size_t k = 0; k < common.size(); ++k) by_heading.emplace_back(std::abs(judges.headingDiff(from[k], to[k])), k);
+  std::sort(by_heading.begin(), by_heading.end(), std::greater<>());
+  constexpr double kDegPerRad = 180.0 / std::numbers::pi;
+  const size_t within_3deg = static_cast<size_t>(std::count_if(
+      by_heading.begin(), by_heading.end(), [&](const auto& h) { return h.first * kDegPerRad <= 3.0; }));
+  json worst_scans = json::array();
+  for (size_t n = 0; n < std::min(worst, by_heading.size()); ++n) {
+    const size_t k = by_heading[n].second, i = common[k];
+    const Pose2& estimate = run.laser_poses[i];
+    worst_scans.push_back({{"stamp_ns", run.stamps_ns[i]},
+                           {"heading_diff_deg", judges.headingDiff(from[k], to[k]) * kDegPerRad},
+                           {"position_diff_m", judges.positionDiff(from[k], to[k])},
+                           {"estimate_vs_first_deg", onto_first.headingDiff(estimate, to[k]) * kDegPerRad},
+                           {"estimate_vs_other_deg", onto_other.headingDiff(estimate, from[k]) * kDegPerRad}});
+  }
+  out["heading_diff_deg"] = {{"median", by_heading[by_heading.size() / 2].first * kDegPerRad},
+                             {"max", by_heading.front().first * kDegPerRad}};
+  out["scans_within_3deg"] = within_3deg;
+  out["worst"] = worst_scans;
+  return out;
 }
 
 }  // namespace rmap::bench

@@ -63,4 +63,16 @@ nlohmann::json judgeClosures(const std::vector<slam2d::LoopClosure2d>& closures,
                              const std::vector<slam2d::LoopClosure2d>& withdrawn, const JudgedRun& run,
                              const std::vector<ClosureJudge>& judges);
 
+/// Where two judges disagree: over the scans both hold a pose of (none
+/// borrowed), `other` is brought onto `first` by one planar rigid motion
+/// (the median heading difference, then the mean offset), and each scan's
+/// heading and position differences are left. The estimate, brought onto
+/// each judge the same way, shows which of the two a scan's pose agrees with.
+/// @param worst  scans listed, largest heading difference first
+/// @return JSON: common_scans, heading_diff_deg {median, max} (absolute),
+///         scans_within_3deg, worst [{stamp_ns, heading_diff_deg,
+///         position_diff_m, estimate_vs_first_deg, estimate_vs_other_deg}]
+nlohmann::json judgesAgreement(const JudgedRun& run, const ClosureJudge& first, const ClosureJudge& other,
+                               size_t worst = 3);
+
 }  // namespace rmap::bench

@@ -277,9 +277,25 @@ int runSlam2dBench(const Slam2dBenchOptions& options) {
                   j["closures_judged"].get<size_t>(), j["judged_by"].get<std::string>().c_str(),
                   j["false_closures"].get<size_t>(), j["false_closures_withdrawn"].get<size_t>(),
                   j["worst_closure_error_m"].is_null() ? 0.0 : j["worst_closure_error_m"].get<double>());
-    if (judges.size() > 1)
+    if (judges.size() > 1) {
       std::printf("  false by every judge: %zu of the %zu closures all judged\n",
                   lc_json["false_by_all_judges"].get<size_t>(), lc_json["closures_judged_by_all"].get<size_t>());
+      json agreement = json::array();
+      for (size_t j = 1; j < judges.size(); ++j) {
+        json a = judgesAgreement(judged_run, judges.front(), judges[j]);
+        if (a.contains("worst")) {
+          std::printf("  judge %zu against the first: %zu scans in common, %zu within 3°, the worst:", j + 1,
+                      a["common_scans"].get<size_t>(), a["scans_within_3deg"].get<size_t>());
+          for (const json& w : a["worst"])
+            std::printf(" %.1f° at %lld (estimate %.1f° from the first, %.1f° from this one);",
+                        w["heading_diff_deg"].get<double>(), static_cast<long long>(w["stamp_ns"].get<int64_t>()),
+                        w["estimate_vs_first_deg"].get<double>(), w["estimate_vs_other_deg"].get<double>());
+          std::printf("\n");
+        }
+        agreement.push_back(std::move(a));
+      }
+      lc_json["judges_agreement"] = std::move(agreement);  // judge 2, 3, … against the first
+    }
     r["loop_closure"] = std::move(lc_json);
   }
   // Baseline: the same relations scored on the reference trajectory (raw

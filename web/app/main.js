@@ -166,7 +166,7 @@ function handleFrame(frame) {
     case 'resync':
       tiles.refreshIndex();
       refreshRobots(true);
-      refreshLoops();
+      refreshLoops({ all: true });  // skipped frames may have withdrawn closures it lists
       break;
     case 'loop_closure':
       if (frame.map === state.map) addLoopClosures([frame], true);
@@ -429,7 +429,15 @@ $('show-robots').addEventListener('change', (e) => renderer.setRobotsVisible(e.t
 function addLoopClosures(events, fresh) {
   let changed = false;
   for (const e of events) {
-    if (state.loopIds.has(e.id)) continue;
+    if (state.loopIds.has(e.id)) {
+      const lc = e.withdrawn_ns != null && state.loops.find((l) => l.id === e.id);
+      if (lc && !lc.withdrawn) {
+        lc.event = e;
+        lc.withdrawn = true;
+        changed = true;
+      }
+      continue;
+    }
     state.loopIds.add(e.id);
     state.loops.push({ id: e.id, event: e, a: e.query?.position ?? null, b: e.match?.position ?? null,
       source: e.source, fresh, withdrawn: e.withdrawn_ns != null, at: Date.now() });
@@ -449,14 +457,7 @@ function addLoopClosures(events, fresh) {
 
 // The pose graph dropped a closure it had reported: its trajectories moved again.
 function withdrawLoopClosure(e) {
-  const lc = state.loops.find((l) => l.id === e.id);
-  if (!lc) {
-    addLoopClosures([e], false);
-  } else {
-    lc.event = e;
-    lc.withdrawn = true;
-    renderLoops();
-  }
+  addLoopClosures([e], false);
   reloadTrajectoriesOf([e.query?.robot_id, e.match?.robot_id]);
 }
 
@@ -501,12 +502,13 @@ function renderLoops() {
   $('loops-empty').classList.toggle('hidden', items.length > 0);
 }
 
-async function refreshLoops() {
+// New closures since the newest listed; `all`: every closure again, to learn of withdrawals.
+async function refreshLoops({ all = false } = {}) {
   if (!state.map) return;
   const map = state.map;
-  const since = state.loops.reduce((m, lc) => (typeof lc.id === 'number' && lc.id > m ? lc.id : m), 0);
+  const since = all ? 0 : state.loops.reduce((m, lc) => (typeof lc.id === 'number' && lc.id > m ? lc.id : m), 0);
   try {
-    const json = await api.json(`/v1/loop-closures?map=${encodeURIComponent(map)}&since=${since}`);
+    const json = await api.json(`/v1/loop-closures?map=${encodeURIComponent(map)}&since=${since}${all ? '&limit=100000' : ''}`);
     if (map === state.map) addLoopClosures(json.loop_closures || [], false);
   } catch (e) {
     noteError(e);

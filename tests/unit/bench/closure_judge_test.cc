@@ -141,5 +141,31 @@ TEST(ClosureJudge, ScansSharingAStampAreNotJudged) {
   EXPECT_EQ(uniqueStampIndex(run.judged.stamps_ns).at(run.judged.stamps_ns[4]), 4u);
 }
 
+// Two corrections of one run, one in another frame and with one bad pose:
+// after bringing one onto the other, the bad scan stands out, and the
+// estimate shows which of the two it agrees with there.
+TEST(ClosureJudge, JudgesAgreementFindsTheScanWhereTwoCorrectionsDisagree) {
+  const TenScanRun run;
+  const ClosureJudge first = run.truthJudge("first");
+  ClosureJudge other = run.truthJudge("other");
+  const Pose2 frame{5.0, -2.0, 30.0 * kDeg};
+  for (auto& p : other.reference) p = frame * *p;
+  *other.reference[2] = *other.reference[2] * Pose2{0.0, 0.0, 12.0 * kDeg};
+  other.reference[7].reset();  // not in common
+  const nlohmann::json a = judgesAgreement(run.judged, first, other, 2);
+  EXPECT_EQ(a["common_scans"], 9);
+  EXPECT_EQ(a["scans_within_3deg"], 8);
+  EXPECT_NEAR(a["heading_diff_deg"]["median"].get<double>(), 0.0, 1e-6);
+  EXPECT_NEAR(a["heading_diff_deg"]["max"].get<double>(), 12.0, 1e-6);
+  ASSERT_EQ(a["worst"].size(), 2u);
+  const nlohmann::json& bad = a["worst"][0];
+  EXPECT_EQ(bad["stamp_ns"], run.judged.stamps_ns[2]);
+  EXPECT_NEAR(std::abs(bad["heading_diff_deg"].get<double>()), 12.0, 1e-6);
+  EXPECT_NEAR(bad["estimate_vs_first_deg"].get<double>(), 0.0, 1e-6);  // the estimate sides with the first
+  EXPECT_NEAR(std::abs(bad["estimate_vs_other_deg"].get<double>()), 12.0, 1e-6);
+  EXPECT_NEAR(a["worst"][1]["heading_diff_deg"].get<double>(), 0.0, 1e-6);
+  EXPECT_LT(a["worst"][1]["position_diff_m"].get<double>(), 0.01);  // only scan 2's heading is off
+}
+
 }  // namespace
 }  // namespace rmap::bench
