@@ -40,8 +40,11 @@ std::unordered_map<int64_t, size_t> uniqueStampIndex(const std::vector<int64_t>&
 json judgeClosures(const std::vector<slam2d::LoopClosure2d>& closures,
                    const std::vector<slam2d::LoopClosure2d>& withdrawn, const JudgedRun& run,
                    const std::vector<ClosureJudge>& judges) {
+  // Stamps alone do not name a closure where scans share stamps; the measurement is the same
+  // copy in both lists (poses differ: a withdrawn closure carries the poses of its withdrawal).
   const auto key = [](const slam2d::LoopClosure2d& c) {
-    return std::tie(c.query_trajectory, c.query_stamp_ns, c.match_trajectory, c.match_stamp_ns);
+    return std::tie(c.query_trajectory, c.query_stamp_ns, c.match_trajectory, c.match_stamp_ns, c.score,
+                    c.relative.x_m, c.relative.y_m, c.relative.theta_rad);
   };
   const auto isWithdrawn = [&](const slam2d::LoopClosure2d& c) {
     return std::any_of(withdrawn.begin(), withdrawn.end(), [&](const slam2d::LoopClosure2d& w) { return key(w) == key(c); });

@@ -100,6 +100,10 @@ TEST(ClosureJudge, WithdrawnClosuresStayCountedAndAreFlagged) {
   const nlohmann::json r = judgeClosures(closures, {closures[1]}, run.judged, {run.truthJudge("truth")});
   EXPECT_EQ(r["closures"], 3);
   EXPECT_EQ(r["withdrawn"], 1);
+  // Where scans share stamps, the measurement tells closures apart.
+  slam2d::LoopClosure2d same_stamps = closures[0];
+  same_stamps.relative.x_m += 1e-3;
+  EXPECT_EQ(judgeClosures(closures, {same_stamps}, run.judged, {})["withdrawn"], 0);
   EXPECT_EQ(r["false_closures"], 2);
   EXPECT_EQ(r["false_closures_withdrawn"], 1);
   EXPECT_EQ(r["judges"][0]["false_closures_withdrawn"], 1);
