@@ -63,7 +63,9 @@ void OccupancyGrid::apply(Cell& cell, float delta, const OccupancyUpdate& update
   cell.value = 1.0f / (1.0f + std::exp(-log_odds));
 }
 
-void OccupancyGrid::miss(int x, int y, const OccupancyUpdate& update, Cursor& cursor) {
+// Inlined into the ray walk, which calls it for every crossed cell: as a call it cost
+// a fifth of raw fr079's run with loop closure (BENCHMARKS §4, *Ray walk*).
+[[gnu::always_inline]] inline void OccupancyGrid::miss(int x, int y, const OccupancyUpdate& update, Cursor& cursor) {
   Cell& cell = cells_.at(x, y, cursor);
   if ((cell.mark >> 1) == insertion_) return;  // already changed by this scan
   cell.mark = insertion_ << 1;
