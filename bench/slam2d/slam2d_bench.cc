@@ -183,7 +183,11 @@ int runSlam2dBench(const Slam2dBenchOptions& options) {
 
   slam2d::Slam2d slam(options.slam);
   const SlamRun run = runSlam(slam, data.inputs);
-  const std::vector<slam2d::LoopClosure2d> closures = slam.takeLoopClosures();
+  std::vector<slam2d::LoopClosure2d> closures = slam.takeLoopClosures();
+  // The log ended: closures still waiting for a later optimisation count too.
+  slam.confirmLoopClosures();
+  const std::vector<slam2d::LoopClosure2d> confirmed_at_end = slam.takeLoopClosures();
+  closures.insert(closures.end(), confirmed_at_end.begin(), confirmed_at_end.end());
   const std::vector<slam2d::LoopClosure2d> withdrawn = slam.takeWithdrawnLoopClosures();
 
   const RelationErrors rel = relationErrors(stamped(data.inputs, run.laser_poses), data.relations);
@@ -263,14 +267,17 @@ int runSlam2dBench(const Slam2dBenchOptions& options) {
                     {"unsupported", lc->unsupported},
                     {"rejected_after_optimization", lc->rejected_after_optimization},
                     {"withdrawn_by_the_graph", lc->withdrawn},
+                    {"unconfirmed", lc->unconfirmed},
+                    {"confirmed_at_end", confirmed_at_end.size()},
                     {"optimizations", lc->optimizations},
                     {"graph_versions", slam.graphVersion()},
                     {"optimization_s", lc->optimization_s},
                     {"search_s", lc->search_s},
                     {"submaps_built", lc->submaps_built}});
-    std::printf("loop closure: %zu closures (%zu withdrawn later), %llu searches, %llu optimisations %.2f s, search "
-                "%.2f s\n",
-                closures.size(), lc_json["withdrawn"].get<size_t>(), static_cast<unsigned long long>(lc->searches),
+    std::printf("loop closure: %zu closures (%zu withdrawn later, %zu confirmed at the end; %llu unconfirmed, not "
+                "reported), %llu searches, %llu optimisations %.2f s, search %.2f s\n",
+                closures.size(), lc_json["withdrawn"].get<size_t>(), confirmed_at_end.size(),
+                static_cast<unsigned long long>(lc->unconfirmed), static_cast<unsigned long long>(lc->searches),
                 static_cast<unsigned long long>(lc->optimizations), lc->optimization_s, lc->search_s);
     for (const json& j : lc_json["judges"])
       std::printf("  %zu judged by %s: %zu false (%zu of them withdrawn later), worst %.3f m\n",

@@ -183,6 +183,8 @@ void MapWorker::run() {
       if (unfused_changes_ && Clock::now() - last_apply_ >= kIdleFuseDelay) {
         map_->fuseAll(config_.maps.insert_threads);
         unfused_changes_ = false;
+        // Ingest paused: no scan will test the closures waiting for a later optimisation for now.
+        postClosures(slam2d_.confirmLoopClosures(), {});
       }
       if (!pending_poses_.empty() &&
           (pending_poses_.size() >= kPoseFlushCount || Clock::now() - last_pose_flush_ >= kPoseFlushPeriod)) {
@@ -328,6 +330,18 @@ void MapWorker::feedPatch(int64_t log_id, const std::string& robot_id, int64_t s
                    !live);
 }
 
+void MapWorker::postClosures(const std::vector<slam2d::LoopClosure2d>& accepted,
+                             const std::vector<slam2d::LoopClosure2d>& withdrawn) {
+  // Stored by the feed's thread: a durable write per closure would hold this worker's acks back.
+  const auto post = [&](const slam2d::LoopClosure2d& c, bool is_withdrawn) {
+    loop_feed_->post({name_, LoopSource::kGeometry, {c.query_trajectory, c.query_stamp_ns, slam2d::planarIsometry(c.query_pose)},
+                      {c.match_trajectory, c.match_stamp_ns, slam2d::planarIsometry(c.match_pose)}, c.score,
+                      slam2d::planarIsometry(c.relative), is_withdrawn});
+  };
+  for (const slam2d::LoopClosure2d& c : accepted) post(c, false);
+  for (const slam2d::LoopClosure2d& c : withdrawn) post(c, true);
+}
+
 void MapWorker::applyScan(int64_t log_id, const v1::RobotMessage& message, const std::string& robot_id,
                           bool in_map3d, bool live) {
   const v1::LaserScan2D& scan = message.scan();
@@ -355,15 +369,7 @@ void MapWorker::applyScan(int64_t log_id, const v1::RobotMessage& message, const
   map3d::CellKey origin_cell;
   planar.in_map3d = !points.empty() && map_->grid().cellChecked(origin, origin_cell);
   planar_scans_[robot_id].push_back(planar);
-  // Stored by the feed's thread: a durable write per closure would hold this worker's acks back.
-  // Accepted ones first: a closure can be accepted and withdrawn with one scan.
-  const auto post = [&](const slam2d::LoopClosure2d& c, bool withdrawn) {
-    loop_feed_->post({name_, LoopSource::kGeometry, {c.query_trajectory, c.query_stamp_ns, slam2d::planarIsometry(c.query_pose)},
-                      {c.match_trajectory, c.match_stamp_ns, slam2d::planarIsometry(c.match_pose)}, c.score,
-                      slam2d::planarIsometry(c.relative), withdrawn});
-  };
-  for (const slam2d::LoopClosure2d& c : result->closures) post(c, false);
-  for (const slam2d::LoopClosure2d& c : result->withdrawn_closures) post(c, true);
+  postClosures(result->closures, result->withdrawn_closures);
   if (!in_map3d) {
     if (planar.in_map3d) {
       map3d::InsertOptions options;

@@ -136,6 +136,10 @@ class MapWorker {
   void applyScan(int64_t log_id, const v1::RobotMessage& message, const std::string& robot_id, bool in_map3d,
                  bool live);
   void applyCloud(const v1::RobotMessage& message, const std::string& robot_id);
+  /// Geometry closures to the loop feed, which stores and pushes them; accepted ones first:
+  /// a closure can be accepted and withdrawn with one scan.
+  void postClosures(const std::vector<slam2d::LoopClosure2d>& accepted,
+                    const std::vector<slam2d::LoopClosure2d>& withdrawn);
   /// After the pose graph moved poses: the moved scans' trajectory poses and robots' poses follow,
   /// and the 3D map's planar rows where they drew are rendered again from the corrected 2D grid.
   /// @param in_map3d  the scan that triggered it is below the 3D snapshot (only the bookkeeping moves)

@@ -99,6 +99,12 @@ std::optional<Slam2dResult> Slam2dLayer::addScan(const std::string& robot_id, co
   return result;
 }
 
+std::vector<slam2d::LoopClosure2d> Slam2dLayer::confirmLoopClosures() {
+  std::unique_lock lock(mutex_);
+  slam_.confirmLoopClosures();
+  return slam_.takeLoopClosures();
+}
+
 void Slam2dLayer::addOdometry(const std::string& robot_id, const v1::Odometry& odometry) {
   odometry_[robot_id] = planar(toIsometry(odometry.pose()));
 }

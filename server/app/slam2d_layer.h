@@ -52,6 +52,9 @@ class Slam2dLayer {
   /// @return nullopt when the SLAM refused the scan (logged; the state is unchanged)
   std::optional<Slam2dResult> addScan(const std::string& robot_id, const v1::LaserScan2D& scan,
                                       const std::optional<Laser2dSetup>& laser);
+  /// Accepts the closures still waiting for a later optimisation (ingest
+  /// paused: nothing tests them for now) and returns them.
+  std::vector<slam2d::LoopClosure2d> confirmLoopClosures();
   /// Keeps the robot's latest odometry as the prior of its next scans.
   void addOdometry(const std::string& robot_id, const v1::Odometry& odometry);
 

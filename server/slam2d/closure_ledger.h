@@ -1,11 +1,15 @@
 #pragma once
 /// @file closure_ledger.h
-/// Which loop closures of the pose graph are reported. A closure is accepted
-/// (reported) once an optimisation kept its edge, and withdrawn when a later
-/// optimisation disables that edge: later closures showed it wrong, and the
-/// map no longer rests on it. No I/O.
+/// Which loop closures of the pose graph are reported. A closure whose edge
+/// the optimisation after it kept is tentative: it is accepted (reported) once
+/// a later optimisation keeps it too, or once its trajectory went on for
+/// hold_ns of sensor time with the edge still in the graph. A tentative one
+/// that a later optimisation disables is dropped unreported: the closures after
+/// it showed it wrong before anyone was told. An accepted closure whose edge a
+/// later optimisation disables is withdrawn. No I/O.
 
 #include <cstddef>
+#include <cstdint>
 #include <functional>
 #include <unordered_map>
 #include <utility>
@@ -24,18 +28,32 @@ struct KeyframeClosure {
 
 class ClosureLedger {
  public:
+  /// @param hold_ns  sensor time a kept closure waits for a later optimisation
+  ///                 before it is accepted anyway (≥ 0; 0: accepted when first kept)
+  explicit ClosureLedger(int64_t hold_ns = 0);
+
   /// A closure whose edge entered the graph: the next settle() decides on it.
-  void await(size_t edge, const KeyframeClosure& closure);
+  /// @param trajectory  the query keyframe's trajectory, whose sensor time holds it
+  void await(size_t edge, const KeyframeClosure& closure, size_t trajectory);
 
   struct Settled {
     size_t accepted = 0, withdrawn = 0;
+    size_t dropped_tentative = 0;  ///< kept by an earlier optimisation, disabled by this one: never reported
   };
-  /// After an optimisation: awaiting closures whose edge is enabled are
-  /// accepted, the others dropped unreported; accepted ones whose edge is now
-  /// disabled are withdrawn (also when not yet taken: take the accepted ones
-  /// first).
+  /// After an optimisation: accepted closures whose edge is now disabled are
+  /// withdrawn (also when not yet taken: take the accepted ones first);
+  /// tentative ones are accepted when their edge is enabled and dropped when
+  /// not; awaiting ones whose edge is enabled become tentative from `now_ns`
+  /// (accepted at once when hold_ns is 0), the others are dropped.
   /// @param enabled  whether an edge is still in the graph
-  Settled settle(const std::function<bool(size_t)>& enabled);
+  /// @param now_ns   a trajectory's newest sensor time
+  Settled settle(const std::function<bool(size_t)>& enabled, const std::function<int64_t(size_t)>& now_ns);
+
+  /// Accepts `trajectory`'s tentative closures held since now_ns − hold_ns or earlier.
+  /// @return how many were accepted
+  size_t confirmHeld(size_t trajectory, int64_t now_ns);
+  /// Accepts every tentative closure (the data ended: nothing can contradict them now).
+  size_t confirmAll();
 
   /// Closures accepted since the last call, in acceptance order.
   std::vector<KeyframeClosure> takeAccepted();
@@ -43,9 +61,18 @@ class ClosureLedger {
   std::vector<KeyframeClosure> takeWithdrawn();
 
  private:
-  std::vector<std::pair<size_t, KeyframeClosure>> awaiting_;  ///< edge, closure
-  std::unordered_map<size_t, KeyframeClosure> held_;          ///< accepted, edge still enabled
-  std::vector<KeyframeClosure> accepted_, withdrawn_;         ///< not yet taken
+  struct Entry {
+    size_t edge = 0;
+    KeyframeClosure closure;
+    size_t trajectory = 0;
+    int64_t kept_ns = 0;  ///< the trajectory's sensor time when an optimisation first kept it
+  };
+  void accept(const Entry& entry);
+
+  int64_t hold_ns_;
+  std::vector<Entry> awaiting_, tentative_;
+  std::unordered_map<size_t, KeyframeClosure> held_;   ///< accepted, edge still enabled
+  std::vector<KeyframeClosure> accepted_, withdrawn_;  ///< not yet taken
 };
 
 }  // namespace rmap::slam2d

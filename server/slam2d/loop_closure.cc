@@ -58,6 +58,7 @@ void LoopClosureOptions::validate() const {
   requireLoopOption(std::isfinite(ambiguous_sigma_along_m) && ambiguous_sigma_along_m >= loop_sigma_m,
                     "ambiguous_sigma_along_m must be finite and ≥ loop_sigma_m");
   requireLoopOption(positive(max_loop_error_m) && positive(max_loop_error_rad), "max_loop_error_* must be > 0");
+  requireLoopOption(nonNegative(confirm_after_s) && confirm_after_s <= 3600.0, "confirm_after_s must be in [0, 3600]");
   requireLoopOption(cached_submaps >= 1, "cached_submaps must be ≥ 1");
   requireLoopOption(nonNegative(match_point_spacing_m), "match_point_spacing_m must be ≥ 0");
   requireLoopOption(nonNegative(rerender_shift_m) && nonNegative(rerender_shift_rad), "rerender_shift_* must be ≥ 0");
@@ -76,7 +77,9 @@ void LoopClosureOptions::validate() const {
 }
 
 LoopCloser::LoopCloser(LoopClosureOptions options)
-    : options_((options.validate(), options)), graph_(options_.graph) {}
+    : options_((options.validate(), options)),
+      graph_(options_.graph),
+      ledger_(static_cast<int64_t>(std::llround(options_.confirm_after_s * 1e9))) {}
 
 Pose2 LoopCloser::graphPose(size_t node) const {
   const graph::Pose2d& p = graph_.pose(node);
@@ -140,7 +143,7 @@ bool LoopCloser::addKeyframe(std::vector<Keyframe>& keyframes) {
     if (p.supported) {
       const size_t e = graph_.addEdge({p.closure.match, p.closure.query, toGraph(p.closure.relative), p.information, true});
       loop_edges_.push_back(e);
-      ledger_.await(e, p.closure);
+      ledger_.await(e, p.closure, keyframes[p.closure.query].trajectory);
       awaiting_ = true;
       trajectories_[keyframes[p.closure.query].trajectory].travel_since_closure_m = 0.0;
     } else if (keyframe_count_ - p.added_at <= static_cast<uint64_t>(options_.support_keyframes)) {
@@ -274,9 +277,12 @@ bool LoopCloser::optimize(std::vector<Keyframe>& keyframes) {
     }
   }
   if (rejected) usable = graph_.optimize().usable || usable;
-  const ClosureLedger::Settled settled = ledger_.settle([&](size_t e) { return graph_.edgeEnabled(e); });
+  const ClosureLedger::Settled settled = ledger_.settle(
+      [&](size_t e) { return graph_.edgeEnabled(e); },
+      [&](size_t t) { return keyframes[*trajectories_[t].last_keyframe].stamp_ns; });
   stats_.accepted += settled.accepted;
   stats_.withdrawn += settled.withdrawn;
+  stats_.unconfirmed += settled.dropped_tentative;
   awaiting_ = false;
   bool moved = false;
   for (size_t i = 0; i < keyframes.size(); ++i) {

@@ -29,9 +29,11 @@
 ///     more than max_loop_error_m after optimisation (check 4);
 ///  4. loop edges carry a Huber loss, and after each optimisation a loop edge
 ///     still off by more than max_loop_error_m / _rad is disabled and the
-///     graph optimised again. A closure is accepted when the optimisation
-///     after it keeps its edge; a later one that disables the edge withdraws
-///     it (ClosureLedger).
+///     graph optimised again. A closure the optimisation after it kept is
+///     tentative, and accepted (reported) once a later optimisation keeps it
+///     too or its trajectory went on for confirm_after_s of sensor time; a
+///     tentative one a later optimisation disables is never reported, an
+///     accepted one is withdrawn (ClosureLedger).
 /// The graph is optimised when supported closures wait and either
 /// optimize_every_keyframes keyframes passed since the last optimisation or
 /// one of them corrects the estimate by more than small_correction_m.
@@ -108,6 +110,12 @@ struct LoopClosureOptions {
   double ambiguous_sigma_along_m = 1.0;
   double max_loop_error_m = 0.3;    ///< after optimisation, loop edges further off are rejected
   double max_loop_error_rad = 0.1;
+  /// Sensor time (s) a closure kept by one optimisation waits for a later one
+  /// before it is reported anyway (0: reported when first kept). During a
+  /// revisit the next optimisation comes within seconds and tests it against
+  /// the closures found after it: on raw intel the first closure of the run,
+  /// 0.6 m off, was kept alone and disabled 1 s later, with three more.
+  double confirm_after_s = 5.0;
   int cached_submaps = 8;           ///< built submap matchers kept (each costs its raster and levels)
   /// Endpoints used for loop matching are at least this far apart (m): the
   /// correlative search costs per point, and 10 cm spacing keeps every wall.
@@ -149,10 +157,11 @@ struct LoopClosureStats {
   uint64_t searches = 0;       ///< correlative searches run (keyframe × candidate submap)
   uint64_t matches = 0;        ///< searches that found a verified match
   uint64_t ambiguous = 0;      ///< of the matches, those with a rival (SubmapMatcherOptions::ambiguity_*)
-  uint64_t accepted = 0;       ///< closures that entered the graph
+  uint64_t accepted = 0;       ///< closures accepted (reported; see ClosureLedger)
   uint64_t unsupported = 0;    ///< dropped for lack of support
   uint64_t rejected_after_optimization = 0;  ///< loop edges disabled (new ones, and accepted ones: withdrawn)
   uint64_t withdrawn = 0;      ///< accepted closures a later optimisation disabled
+  uint64_t unconfirmed = 0;    ///< tentative closures a later optimisation disabled (never reported)
   uint64_t optimizations = 0;
   double search_s = 0.0, optimization_s = 0.0;  ///< wall time (steady clock)
   uint64_t submaps_built = 0;
@@ -169,6 +178,12 @@ class LoopCloser {
   /// and, when due, optimises, writing corrected poses into `keyframes`.
   /// @return true when keyframe poses moved
   bool addKeyframe(std::vector<Keyframe>& keyframes);
+
+  /// Accepts the tentative closures of `trajectory` (Keyframe::trajectory)
+  /// held for confirm_after_s by `stamp_ns`, its newest sensor time.
+  void confirmHeld(size_t trajectory, int64_t stamp_ns) { stats_.accepted += ledger_.confirmHeld(trajectory, stamp_ns); }
+  /// Accepts every tentative closure: the data ended.
+  void confirmAll() { stats_.accepted += ledger_.confirmAll(); }
 
   using Closure = KeyframeClosure;
   /// Closures accepted since the last call.

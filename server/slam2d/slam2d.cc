@@ -297,6 +297,7 @@ Pose2 Slam2d::addScan(const std::string& trajectory, const LaserScan& scan, cons
   scans_[track.index].push_back({scan.stamp_ns, track.keyframe,
                                  track.keyframe ? between(keyframes_[*track.keyframe].pose, estimate) : estimate});
   trajectories_[trajectory] = track;
+  if (loop_closer_) loop_closer_->confirmHeld(track.index, scan.stamp_ns);
 
   if (keyframe_added && loop_closer_) {
     // Each trajectory's pose and last update pose ride on its newest keyframe.
@@ -375,6 +376,10 @@ std::vector<LoopClosure2d> Slam2d::reported(const std::vector<KeyframeClosure>& 
                    match.pose, c.score, c.relative});
   }
   return out;
+}
+
+void Slam2d::confirmLoopClosures() {
+  if (loop_closer_) loop_closer_->confirmAll();
 }
 
 std::vector<LoopClosure2d> Slam2d::takeLoopClosures() {

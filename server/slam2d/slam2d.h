@@ -170,8 +170,13 @@ class Slam2d {
   uint64_t version() const { return version_; }
   const Slam2dOptions& options() const { return options_; }
 
-  /// Loop closures accepted (through an optimisation) since the last call.
+  /// Loop closures accepted since the last call: kept by the optimisation
+  /// after them and by a later one, or held for
+  /// LoopClosureOptions::confirm_after_s of their trajectory's sensor time.
   std::vector<LoopClosure2d> takeLoopClosures();
+  /// Accepts the closures still waiting for a second optimisation: call when
+  /// the data ended (a log's end), since nothing will test them any more.
+  void confirmLoopClosures();
   /// Accepted loop closures a later optimisation dropped, since the last
   /// call (take the accepted ones first: one may be both). Poses as now.
   std::vector<LoopClosure2d> takeWithdrawnLoopClosures();

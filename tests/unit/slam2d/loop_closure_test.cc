@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <stdexcept>
@@ -75,7 +76,9 @@ TEST_F(SimulatedLoop, ClosingTheLoopEndsCloserToTruth) {
   EXPECT_LT(error_with, 0.5 * error_without);
   EXPECT_GT(with.graphVersion(), 0u);
   EXPECT_EQ(without.graphVersion(), 0u);
-  const std::vector<LoopClosure2d> closures = with.takeLoopClosures();
+  std::vector<LoopClosure2d> closures = with.takeLoopClosures();
+  with.confirmLoopClosures();  // the data ended: the ones waiting for a later optimisation count
+  for (LoopClosure2d& c : with.takeLoopClosures()) closures.push_back(c);
   ASSERT_FALSE(closures.empty());
   for (const LoopClosure2d& c : closures) {
     EXPECT_EQ(c.query_trajectory, "robot");
@@ -111,6 +114,53 @@ TEST_F(SimulatedLoop, ClosesBetweenTwoTrajectories) {
   EXPECT_LT(std::abs(normalizeAngle(end.theta_rad - b.back().theta_rad)), 0.03);
 }
 
+// The hold (confirm_after_s) only delays reports: the graph, and so the
+// trajectory, is the same, and every closure reported with it is one reported
+// without, at the same scan or later.
+TEST_F(SimulatedLoop, HoldingClosuresDelaysTheirReportsOnly) {
+  const std::vector<Pose2> out = testing::smoothTurns(std::vector<Pose2>(tour_->begin(), tour_->begin() + 120), 0.1);
+  const std::vector<Pose2> again = testing::smoothTurns(std::vector<Pose2>(tour_->begin(), tour_->begin() + 60), 0.1);
+  std::vector<Pose2> truth = out;
+  truth.insert(truth.end(), again.begin(), again.end());
+  const sim::Laser2dModel model = sim::Laser2dModel::sickLike();
+  struct Report {
+    size_t scan = 0;
+    LoopClosure2d closure;
+  };
+  const auto run = [&](double confirm_after_s, std::vector<Report>& reports) {
+    Slam2dOptions options;
+    options.loop_closure.confirm_after_s = confirm_after_s;
+    Slam2d slam(options);
+    std::mt19937_64 rng(33);
+    for (size_t k = 0; k < truth.size(); ++k) {
+      slam.addScan("robot", testing::simScan(*world_, truth[k], model, rng, int64_t(k) * 100'000'000), truth[k]);
+      for (LoopClosure2d& c : slam.takeLoopClosures()) reports.push_back({k, c});
+    }
+    slam.confirmLoopClosures();
+    for (LoopClosure2d& c : slam.takeLoopClosures()) reports.push_back({truth.size(), c});
+    return slam.trajectory("robot");
+  };
+  std::vector<Report> at_once, held;
+  const std::vector<StampedPose2> a = run(0.0, at_once), b = run(5.0, held);
+  ASSERT_EQ(a.size(), b.size());
+  for (size_t i = 0; i < a.size(); ++i) {
+    EXPECT_EQ(a[i].pose.x_m, b[i].pose.x_m);
+    EXPECT_EQ(a[i].pose.theta_rad, b[i].pose.theta_rad);
+  }
+  ASSERT_FALSE(at_once.empty());
+  ASSERT_FALSE(held.empty());
+  size_t later = 0;
+  for (const Report& h : held) {
+    const auto same = std::find_if(at_once.begin(), at_once.end(), [&](const Report& r) {
+      return r.closure.query_stamp_ns == h.closure.query_stamp_ns && r.closure.match_stamp_ns == h.closure.match_stamp_ns;
+    });
+    ASSERT_NE(same, at_once.end()) << "a held closure the graph would not have reported";
+    EXPECT_GE(h.scan, same->scan);
+    later += h.scan > same->scan;
+  }
+  EXPECT_GT(later, 0u) << "the hold held nothing back";
+}
+
 TEST(LoopClosureOptions, BadOptionsThrow) {
   const auto throws = [](auto change) {
     Slam2dOptions options;
@@ -125,6 +175,8 @@ TEST(LoopClosureOptions, BadOptionsThrow) {
   throws([](LoopClosureOptions& o) { o.loop_sigma_m = 0.0; });
   throws([](LoopClosureOptions& o) { o.sequential_sigma_rad = NAN; });
   throws([](LoopClosureOptions& o) { o.optimize_every_keyframes = 0; });
+  throws([](LoopClosureOptions& o) { o.confirm_after_s = -1.0; });
+  throws([](LoopClosureOptions& o) { o.confirm_after_s = NAN; });
   throws([](LoopClosureOptions& o) { o.graph.loss_scale = -1.0; });
   throws([](LoopClosureOptions& o) { o.submap.correlative.branch_levels = 0; });
   throws([](LoopClosureOptions& o) { o.ambiguous_sigma_along_m = o.loop_sigma_m / 2; });
