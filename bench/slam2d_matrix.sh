@@ -10,7 +10,8 @@
 # Every run with odometry is repeated with --loop-closure on ("-loop-closure"
 # rows; LOOP_CLOSURE=0 skips them): its closures are judged against the
 # corrected logs of the same run where they exist (--closure-reference; the
-# table gives the first one's count of false closures and, with two, the count
+# table gives the first one's count of false closures, judged against the
+# anchor's pose and against the submap as a whole, and, with two, the count
 # both call false), else against the reference poses.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -102,7 +103,7 @@ done
     jq -r --arg name "$name" '
       def f(d): if . == null then "–" else (. * pow(10; d) | round / pow(10; d) | tostring) end;
       def pm(x; d): if x.mean == null then "–" else "\(x.mean | f(d)) ± \(x.std | f(d))" end;
-      "| \($name) | \(.scans) | \(.odometry) | \(.relations_used) | \(pm(.rel_trans_err_m; 4)) | \(pm(.rel_rot_err_deg; 3)) | \(pm(.reference_rel_trans_err_m; 4)) | \(.ate_vs_reference_m | f(3)) | \(.rpe_1m_m | f(4)) | \(.realtime_factor | f(0)) | \(.cpu_s | f(2)) | \(.ate_vs_truth_m | f(4)) | \(.reflectivity_rel_err_median | f(3)) | \(if .reflectivity_spread_raw == null then "–" else "\(.reflectivity_spread_raw | f(3)) → \(.reflectivity_spread_calibrated | f(3))" end) | \(if .loop_closure == null then "–" else "\(.loop_closure.closures) (\(.loop_closure.closures_judged), \(.loop_closure.false_closures // "–")\(if .loop_closure.false_by_all_judges == null then "" else "; by every judge \(.loop_closure.false_by_all_judges)" end))" end) | \(.loop_closure.optimization_s | f(2)) |"
+      "| \($name) | \(.scans) | \(.odometry) | \(.relations_used) | \(pm(.rel_trans_err_m; 4)) | \(pm(.rel_rot_err_deg; 3)) | \(pm(.reference_rel_trans_err_m; 4)) | \(.ate_vs_reference_m | f(3)) | \(.rpe_1m_m | f(4)) | \(.realtime_factor | f(0)) | \(.cpu_s | f(2)) | \(.ate_vs_truth_m | f(4)) | \(.reflectivity_rel_err_median | f(3)) | \(if .reflectivity_spread_raw == null then "–" else "\(.reflectivity_spread_raw | f(3)) → \(.reflectivity_spread_calibrated | f(3))" end) | \(if .loop_closure == null then "–" else "\(.loop_closure.closures) (\(.loop_closure.closures_judged), \(.loop_closure.false_closures // "–")\(if .loop_closure.false_against_submap == null then "" else "; against the submap \(.loop_closure.false_against_submap)" end)\(if .loop_closure.false_by_all_judges == null then "" else "; by every judge \(.loop_closure.false_by_all_judges)" end))" end) | \(.loop_closure.optimization_s | f(2)) |"
     ' "$out/$name.json"
   done
 } | tee "$out/table.md"

@@ -45,7 +45,12 @@ struct JudgedRun {
 };
 
 /// Judges every closure against every judge: the error of its measured
-/// laser-to-laser relative pose against each judge's poses of its two scans.
+/// laser-to-laser relative pose against each judge's poses of its two scans,
+/// and against the submap as a whole — the judge's anchor pose fitted to all
+/// the submap's keyframes (LoopClosure2d::match_submap), since the scan was
+/// matched against the submap, not the anchor's scan: a judge's bad pose of
+/// the anchor alone (raw mit-csail, BENCHMARKS.md §4) then does not make the
+/// closure false.
 /// `withdrawn` are the closures a later optimisation dropped (they stay
 /// counted: they were accepted), flagged in the list and counted apart.
 /// Scans that share a stamp are not judged (the stamp does not name them).
@@ -54,11 +59,14 @@ struct JudgedRun {
 /// headline fields.
 /// @return JSON: closures, withdrawn, cross_trajectory_closures;
 ///         closures_judged, false_closures, false_closures_withdrawn,
-///         worst_closure_error_m and judged_by (the first judge's; null
-///         without a judge); judges (each judge's counts);
+///         worst_closure_error_m, false_against_submap and judged_by (the
+///         first judge's; null without a judge); judges (each judge's counts,
+///         also closures_judged_against_submap and false_against_submap);
 ///         closures_judged_by_all and false_by_all_judges (with two judges or
 ///         more, else null); list (each closure with `withdrawn`, the first
-///         judge's error and, with two judges or more, by_judge)
+///         judge's errors — submap_error_m, submap_error_deg and
+///         false_against_submap where the submap had 3 keyframes with a
+///         judge's pose — and, with two judges or more, by_judge)
 nlohmann::json judgeClosures(const std::vector<slam2d::LoopClosure2d>& closures,
                              const std::vector<slam2d::LoopClosure2d>& withdrawn, const JudgedRun& run,
                              const std::vector<ClosureJudge>& judges);

@@ -280,10 +280,12 @@ int runSlam2dBench(const Slam2dBenchOptions& options) {
                 static_cast<unsigned long long>(lc->unconfirmed), static_cast<unsigned long long>(lc->searches),
                 static_cast<unsigned long long>(lc->optimizations), lc->optimization_s, lc->search_s);
     for (const json& j : lc_json["judges"])
-      std::printf("  %zu judged by %s: %zu false (%zu of them withdrawn later), worst %.3f m\n",
+      std::printf("  %zu judged by %s: %zu false (%zu of them withdrawn later), worst %.3f m; against the whole "
+                  "submap %zu false of %zu\n",
                   j["closures_judged"].get<size_t>(), j["judged_by"].get<std::string>().c_str(),
                   j["false_closures"].get<size_t>(), j["false_closures_withdrawn"].get<size_t>(),
-                  j["worst_closure_error_m"].is_null() ? 0.0 : j["worst_closure_error_m"].get<double>());
+                  j["worst_closure_error_m"].is_null() ? 0.0 : j["worst_closure_error_m"].get<double>(),
+                  j["false_against_submap"].get<size_t>(), j["closures_judged_against_submap"].get<size_t>());
     if (judges.size() > 1) {
       std::printf("  false by every judge: %zu of the %zu closures all judged\n",
                   lc_json["false_by_all_judges"].get<size_t>(), lc_json["closures_judged_by_all"].get<size_t>());

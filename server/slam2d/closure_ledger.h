@@ -24,6 +24,8 @@ struct KeyframeClosure {
   size_t query = 0, match = 0;
   double score = 0.0;
   Pose2 relative;  ///< the matched pose of the query in the match's frame (the edge's measurement)
+  /// The matched submap as it was matched against: each keyframe and its pose in the match's frame.
+  std::vector<std::pair<size_t, Pose2>> submap;
 };
 
 class ClosureLedger {

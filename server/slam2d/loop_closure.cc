@@ -195,6 +195,9 @@ void LoopCloser::search(std::vector<Keyframe>& keyframes, size_t query, Trajecto
     const std::optional<SubmapMatch> m =
         matcher(keyframes, s).match(kf.match_points, center, window_m, window_rad, min_score);
     if (!m) continue;
+    std::vector<std::pair<size_t, Pose2>> members;  // matcher() left this submap first in the cache
+    for (size_t i = 0; i < submaps_[s].keyframes.size(); ++i)
+      members.emplace_back(submaps_[s].keyframes[i], cache_.front().relative[i]);
     ++stats_.matches;
     stats_.ambiguous += m->ambiguous();
     Eigen::Matrix3d information = diagonalInformation(options_.loop_sigma_m, options_.loop_sigma_rad);
@@ -205,7 +208,7 @@ void LoopCloser::search(std::vector<Keyframe>& keyframes, size_t query, Trajecto
       const double weak = std::pow(options_.loop_sigma_m / options_.ambiguous_sigma_along_m, 2);
       information.topLeftCorner<2, 2>() -= (1.0 - weak) / std::pow(options_.loop_sigma_m, 2) * along * along.transpose();
     }
-    pending_.push_back({{query, anchor, m->score, m->pose}, information, keyframe_count_, false});
+    pending_.push_back({{query, anchor, m->score, m->pose, std::move(members)}, information, keyframe_count_, false});
   }
   stats_.search_s += secondsSince(t0);
 }

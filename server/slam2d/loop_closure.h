@@ -140,6 +140,12 @@ struct LoopClosureOptions {
   void validate() const;
 };
 
+/// A keyframe of a matched submap, as the submap was built.
+struct SubmapKeyframe {
+  int64_t stamp_ns = 0;
+  Pose2 relative;  ///< in the frame of the submap's anchor (LoopClosure2d::match_pose)
+};
+
 /// One accepted geometric closure.
 struct LoopClosure2d {
   std::string query_trajectory;
@@ -150,6 +156,9 @@ struct LoopClosure2d {
   Pose2 match_pose;       ///< the older keyframe it closed on (corrected), the anchor of the matched submap
   double score = 0.0;     ///< correlative match score 0..1
   Pose2 relative;         ///< the matched pose of the query in match_pose's frame (the loop edge's measurement)
+  /// The submap the scan was matched against (match_trajectory's keyframes,
+  /// the anchor among them): a closure can be judged against it as a whole.
+  std::vector<SubmapKeyframe> match_submap;
 };
 
 /// Counters and timing of the loop closure, for benchmarks.

@@ -34,6 +34,14 @@ struct TenScanRun {
     c.relative = between(robot_truth[match], robot_truth[query]) * error;
     return c;
   }
+  /// The same closure, matched against the submap of scans [first, last] anchored at `match`.
+  slam2d::LoopClosure2d closureOnSubmap(size_t query, size_t match, size_t first, size_t last,
+                                        const Pose2& error = {}) const {
+    slam2d::LoopClosure2d c = closure(query, match, error);
+    for (size_t k = first; k <= last; ++k)
+      c.match_submap.push_back({judged.stamps_ns[k], between(robot_truth[match], robot_truth[k])});
+    return c;
+  }
   ClosureJudge truthJudge(const std::string& name) const {
     return {name, std::vector<std::optional<Pose2>>(judged.laser_poses.begin(), judged.laser_poses.end())};
   }
@@ -93,6 +101,34 @@ TEST(ClosureJudge, EachJudgeGivesItsVerdict) {
 }
 
 // A closure the graph withdrew later was still accepted: it counts, flagged.
+// The scan was matched against the submap, not the anchor's scan: a judge
+// whose pose of the anchor alone is off still judges the closure right
+// against the submap as a whole, and a closure that is off stays false.
+TEST(ClosureJudge, AgainstTheWholeSubmapABadReferencePoseOfTheAnchorDoesNotMakeAClosureFalse) {
+  const TenScanRun run;
+  ClosureJudge skewed = run.truthJudge("skewed");
+  *skewed.reference[2] = *skewed.reference[2] * Pose2{0.1, 0.0, 12.0 * kDeg};  // the anchor's pose is off
+  const std::vector<slam2d::LoopClosure2d> closures = {
+      run.closureOnSubmap(8, 2, 0, 4),                           // right
+      run.closureOnSubmap(9, 2, 0, 4, {0.0, 0.4, 0.0}),          // 0.4 m off
+      run.closureOnSubmap(7, 3, 3, 4),                           // too few keyframes with a pose: not judged so
+  };
+  const nlohmann::json r = judgeClosures(closures, {}, run.judged, {skewed});
+  EXPECT_EQ(r["false_closures"], 2);  // against the anchor's pose the right one looks 12° off
+  EXPECT_EQ(r["false_against_submap"], 1);
+  EXPECT_EQ(r["judges"][0]["closures_judged_against_submap"], 2);
+  const nlohmann::json& list = r["list"];
+  EXPECT_TRUE(list[0]["false"].get<bool>());
+  EXPECT_NEAR(list[0]["error_deg"].get<double>(), 12.0, 1e-6);
+  EXPECT_FALSE(list[0]["false_against_submap"].get<bool>());
+  // One skewed keyframe of five: the median heading ignores it, the mean position moves 2 cm.
+  EXPECT_LT(list[0]["submap_error_deg"].get<double>(), 1e-6);
+  EXPECT_LT(list[0]["submap_error_m"].get<double>(), 0.1);
+  EXPECT_TRUE(list[1]["false_against_submap"].get<bool>());
+  EXPECT_NEAR(list[1]["submap_error_m"].get<double>(), 0.4, 0.1);
+  EXPECT_FALSE(list[2].contains("submap_error_m"));
+}
+
 TEST(ClosureJudge, WithdrawnClosuresStayCountedAndAreFlagged) {
   const TenScanRun run;
   const std::vector<slam2d::LoopClosure2d> closures = {run.closure(8, 2), run.closure(7, 1, {0.0, 0.35, 0.0}),

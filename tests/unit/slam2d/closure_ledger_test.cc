@@ -8,7 +8,7 @@
 namespace rmap::slam2d {
 namespace {
 
-KeyframeClosure closure(size_t query, size_t match) { return {query, match, 0.7, {1.0, 0.0, 0.0}}; }
+KeyframeClosure closure(size_t query, size_t match) { return {query, match, 0.7, {1.0, 0.0, 0.0}, {}}; }
 
 std::function<bool(size_t)> enabledExcept(std::set<size_t> disabled) {
   return [disabled](size_t edge) { return disabled.count(edge) == 0; };
