@@ -14,7 +14,10 @@ void ClosureLedger::await(size_t edge, const KeyframeClosure& closure, size_t tr
 
 void ClosureLedger::accept(const Entry& entry) {
   accepted_.push_back(entry.closure);
-  held_.emplace(entry.edge, entry.closure);
+  // Held for as long as the graph lives: without its submap (a kilobyte per closure).
+  KeyframeClosure held = entry.closure;
+  held.submap = {};
+  held_.emplace(entry.edge, std::move(held));
 }
 
 ClosureLedger::Settled ClosureLedger::settle(const std::function<bool(size_t)>& enabled,

@@ -59,7 +59,8 @@ class ClosureLedger {
 
   /// Closures accepted since the last call, in acceptance order.
   std::vector<KeyframeClosure> takeAccepted();
-  /// Closures withdrawn since the last call, each once accepted before.
+  /// Closures withdrawn since the last call, each once accepted before
+  /// (without KeyframeClosure::submap: only the accepted report carries it).
   std::vector<KeyframeClosure> takeWithdrawn();
 
  private:

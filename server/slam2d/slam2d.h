@@ -178,7 +178,8 @@ class Slam2d {
   /// the data ended (a log's end), since nothing will test them any more.
   void confirmLoopClosures();
   /// Accepted loop closures a later optimisation dropped, since the last
-  /// call (take the accepted ones first: one may be both). Poses as now.
+  /// call (take the accepted ones first: one may be both). Poses as now;
+  /// match_submap is empty (the accepted report carried it).
   std::vector<LoopClosure2d> takeWithdrawnLoopClosures();
   /// Every scan's robot pose in scan order, corrected by the pose graph (each
   /// scan rides on the keyframe before it); empty for an unknown trajectory.

@@ -62,13 +62,20 @@ TEST(ClosureLedger, AnAcceptedClosureWhoseEdgeALaterOptimisationDisablesIsWithdr
 
 // A caller that takes closures rarely (a benchmark, at the end of a run)
 // still sees each accepted closure, and its withdrawal after it.
+// The accepted report carries the matched submap; the ledger does not keep it.
 TEST(ClosureLedger, AClosureWithdrawnBeforeItWasTakenIsReportedBothWays) {
   ClosureLedger ledger;
-  ledger.await(10, closure(100, 5), 0);
+  KeyframeClosure c = closure(100, 5);
+  c.submap = {{4, {-0.5, 0.0, 0.0}}, {5, {}}, {6, {0.5, 0.0, 0.0}}};
+  ledger.await(10, c, 0);
   ledger.settle(enabledExcept({}), at(0));
   ledger.settle(enabledExcept({10}), at(0));
-  EXPECT_EQ(ledger.takeAccepted().size(), 1u);
-  EXPECT_EQ(ledger.takeWithdrawn().size(), 1u);
+  const std::vector<KeyframeClosure> accepted = ledger.takeAccepted(), withdrawn = ledger.takeWithdrawn();
+  ASSERT_EQ(accepted.size(), 1u);
+  ASSERT_EQ(withdrawn.size(), 1u);
+  EXPECT_EQ(accepted[0].submap.size(), 3u);
+  EXPECT_EQ(withdrawn[0].query, 100u);
+  EXPECT_TRUE(withdrawn[0].submap.empty());
 }
 
 // With a hold, a closure kept alone is only tentative: the closures found after
