@@ -4,12 +4,13 @@
 
 #include <chrono>
 #include <future>
-#include <random>
 #include <thread>
 
-#include "../slam2d/sim_scans.h"
 #include "app/slam2d_layer.h"
+#include "client/laser2d_robot.h"
 #include "service_test_support.h"
+#include "sim/building.h"
+#include "sim/trajectory.h"
 
 namespace rmap::app {
 namespace {
@@ -51,40 +52,29 @@ TEST(MapWorker, AnIdleMapFusesItsHotBlocksWithoutChangingACell) {
   EXPECT_EQ(ray_before.state, map3d::CellState::kFree);
 }
 
-/// A simulated scan with its odometry (the true pose) as a robot sends it.
-v1::RobotMessage scanMessage(uint64_t seq, const sim::Laser2dScan& s, const slam2d::Pose2& odometry) {
-  v1::RobotMessage m;
-  m.set_seq(seq);
-  v1::LaserScan2D& scan = *m.mutable_scan();
-  scan.set_stamp_ns(static_cast<int64_t>(seq) * 100'000'000);
-  scan.set_angle_min_rad(s.angle_min_rad);
-  scan.set_angle_increment_rad(s.angle_increment_rad);
-  scan.set_range_min_m(s.range_min_m);
-  scan.set_range_max_m(s.range_max_m);
-  for (float r : s.ranges_m) scan.add_ranges_m(r);
-  for (float i : s.intensities) scan.add_intensities(i);
-  scan.mutable_odometry()->set_x_m(odometry.x_m);
-  scan.mutable_odometry()->set_y_m(odometry.y_m);
-  scan.mutable_odometry()->set_theta_rad(odometry.theta_rad);
-  return m;
-}
-
 // A robot that stops right after closing a loop: the closures still waiting for a
 // later optimisation (LoopClosureOptions::confirm_after_s) are stored once the map's
 // ingest paused, as the end of a log gives them.
 TEST(MapWorker, ClosuresWaitingWhenARobotStopsAreStoredOnceTheMapIsIdle) {
-  const sim::VoxelWorld world = slam2d::testing::simBuilding();
-  const std::vector<slam2d::Pose2> tour = slam2d::testing::simTour(world, 240, 0.25);
-  // Out along the tour, then its first stretch again: 3 s of scans, less than the hold.
-  std::vector<slam2d::Pose2> path = slam2d::testing::smoothTurns({tour.begin(), tour.begin() + 120}, 0.1);
-  const std::vector<slam2d::Pose2> again = slam2d::testing::smoothTurns({tour.begin(), tour.begin() + 30}, 0.1);
-  path.insert(path.end(), again.begin(), again.end());
-  const sim::Laser2dModel model = sim::Laser2dModel::sickLike();
-  std::mt19937_64 rng(41);
+  const sim::VoxelWorld world = sim::makeBuilding(sim::BuildingOptions{}, 7);
+  sim::TrajectoryOptions tour;
+  tour.num_poses = 120;
+  tour.step_m = 0.26;
+  client::Laser2dRobotOptions laser;
+  laser.laser = sim::Laser2dModel::sickLike();
+  laser.mount_forward_m = 0.0;  // the laser at the base: this robot sends no Hello describing it
+  // Out along the tour and 80 steps back over it: closures on the way back, the last ones
+  // within the hold when it stops.
+  client::Laser2dRobot robot(world, sim::planTrajectory(world, tour, 3), laser, 41);
   std::vector<v1::RobotMessage> messages;
-  for (size_t k = 0; k < path.size(); ++k)
-    messages.push_back(scanMessage(k + 1, sim::simulateLaser2d(world, slam2d::testing::sensorAt(path[k]), model, rng),
-                                   path[k]));
+  constexpr uint64_t kStops = 200;  // steps before the robot stops
+  for (uint64_t seq = 1; seq <= kStops; ++seq) {
+    v1::RobotMessage m;
+    m.set_seq(seq);
+    *m.mutable_scan() = robot.next().scan;
+    m.mutable_scan()->set_stamp_ns(static_cast<int64_t>(seq) * 100'000'000);
+    messages.push_back(std::move(m));
+  }
 
   // The same scans through a 2D SLAM layer of its own: what the map must store.
   Metrics metrics;
@@ -94,7 +84,8 @@ TEST(MapWorker, ClosuresWaitingWhenARobotStopsAreStoredOnceTheMapIsIdle) {
     if (const std::optional<Slam2dResult> r = reference.addScan("bot", m.scan(), std::nullopt))
       at_scans += r->closures.size();
   const size_t at_pause = reference.confirmLoopClosures().size();
-  ASSERT_GT(at_pause, 0u) << "no closure waited at the end: this would not test the pause";
+  ASSERT_GT(at_pause, 0u) << "no closure waited at the end (" << at_scans
+                          << " came with the scans): this would not test the pause";
 
   store::TempDir dir;
   MappingService service(testing::configIn(dir.path()));
