@@ -22,8 +22,9 @@ std::optional<PlaceRecognizer::Match> BowRecognizer::addFrame(const PlaceImage& 
   return match;
 }
 
-RecognizerFactory bowRecognizers(const LoopClosureConfig& config) {
-  return [config](FrameKind kind) -> std::unique_ptr<PlaceRecognizer> {
+RecognizerFactory bowRecognizers(const LoopClosureConfig& config, const slam2d::LoopClosureOptions& slam_loops) {
+  const PoseTolerance patch_tolerance{slam_loops.max_window_m, slam_loops.max_window_rad};
+  return [config, patch_tolerance](FrameKind kind) -> std::unique_ptr<PlaceRecognizer> {
     const bool on = kind == FrameKind::kCamera              ? config.camera
                     : kind == FrameKind::kIntensityPanorama ? config.cloud_intensity
                                                             : config.reflectivity_patches;
@@ -45,8 +46,7 @@ RecognizerFactory bowRecognizers(const LoopClosureConfig& config) {
       // ...around the poses its 2D SLAM gave them, in one frame: two patches of one place lie where
       // those poses say, but for the drift the SLAM's own loop search still corrects (its widest
       // window). A look-alike elsewhere fits a motion the poses deny (seen: turned 180°).
-      const slam2d::LoopClosureOptions slam_loops;
-      tolerance = PoseTolerance{slam_loops.max_window_m, slam_loops.max_window_rad};
+      tolerance = patch_tolerance;
     }
     return std::make_unique<BowRecognizer>(std::move(options), std::move(pixel_motion), tolerance);
   };

@@ -34,6 +34,8 @@ class BowRecognizer : public PlaceRecognizer {
 };
 
 /// A BowRecognizer for each kind of frame the config turns on.
-RecognizerFactory bowRecognizers(const LoopClosureConfig& config);
+/// @param slam_loops  the 2D SLAM's loop closure: its widest search window bounds the motion a
+///                    reflectivity-patch match may measure between the SLAM's poses
+RecognizerFactory bowRecognizers(const LoopClosureConfig& config, const slam2d::LoopClosureOptions& slam_loops = {});
 
 }  // namespace rmap::app

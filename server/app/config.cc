@@ -5,9 +5,11 @@
 #include "app/slam2d_layer.h"
 #include "map3d/cuboid_map.h"
 
+#include <algorithm>
 #include <cmath>
 #include <set>
 #include <stdexcept>
+#include <string_view>
 
 namespace rmap::app {
 
@@ -34,11 +36,27 @@ void read(const YAML::Node& node, const char* key, T& value) {
   if (const YAML::Node child = node[key]) value = child.as<T>();
 }
 
+/// A misspelt key would otherwise be ignored and its default used without a word.
+/// @param section  the mapping's path in the file ("" for the top level), for the message
+void rejectUnknownKeys(const YAML::Node& node, std::initializer_list<std::string_view> known,
+                       const std::string& section) {
+  if (!node || node.IsNull()) return;
+  if (!node.IsMap()) throw std::invalid_argument((section.empty() ? "the file" : section) + " must be a mapping");
+  for (const auto& entry : node) {
+    const std::string key = entry.first.as<std::string>();
+    if (std::find(known.begin(), known.end(), key) == known.end()) {
+      throw std::invalid_argument("unknown key '" + (section.empty() ? key : section + "." + key) + "'");
+    }
+  }
+}
+
 void readAuth(const YAML::Node& node, AuthConfig& auth) {
   if (!node) return;
+  rejectUnknownKeys(node, {"tokens", "allowed_origins"}, "auth");
   if (const YAML::Node tokens = node["tokens"]) {
     auth.tokens.clear();
     for (const YAML::Node& t : tokens) {
+      rejectUnknownKeys(t, {"token", "role", "robot_id"}, "auth.tokens[]");
       TokenConfig token;
       token.token = t["token"].as<std::string>();
       token.role = parseRole(t["role"].as<std::string>());
@@ -50,6 +68,10 @@ void readAuth(const YAML::Node& node, AuthConfig& auth) {
 }
 
 void readLimits(const YAML::Node& node, LimitsConfig& limits) {
+  rejectUnknownKeys(node, {"max_frame_bytes", "max_body_bytes", "max_points_per_cloud", "max_batch_points",
+                           "max_in_flight_per_robot", "max_messages_per_s_per_robot", "viewer_send_queue_bytes",
+                           "max_box_cuboids", "max_import_blocks", "max_memory_bytes"},
+                    "limits");
   if (!node) return;
   read(node, "max_frame_bytes", limits.max_frame_bytes);
   read(node, "max_body_bytes", limits.max_body_bytes);
@@ -64,6 +86,9 @@ void readLimits(const YAML::Node& node, LimitsConfig& limits) {
 }
 
 void readMaps(const YAML::Node& node, MapDefaults& maps) {
+  rejectUnknownKeys(node, {"resolution_m", "insert_threads", "max_range_m", "hit_log_odds", "miss_log_odds",
+                           "fusion_tolerance_log_odds"},
+                    "maps");
   if (!node) return;
   read(node, "resolution_m", maps.resolution_m);
   read(node, "insert_threads", maps.insert_threads);
@@ -71,6 +96,43 @@ void readMaps(const YAML::Node& node, MapDefaults& maps) {
   read(node, "hit_log_odds", maps.occupancy.hit_log_odds);
   read(node, "miss_log_odds", maps.occupancy.miss_log_odds);
   read(node, "fusion_tolerance_log_odds", maps.fusion.tolerance_log_odds);
+}
+
+/// The geometric loop closure of the 2D SLAM: the options a deployment tunes.
+void readSlam2dLoopClosure(const YAML::Node& node, slam2d::LoopClosureOptions& loop) {
+  rejectUnknownKeys(node, {"enabled", "min_score", "sparse_min_score", "max_window_m", "max_window_rad",
+                           "confirm_after_s"},
+                    "slam2d.loop_closure");
+  if (!node) return;
+  read(node, "enabled", loop.enabled);
+  read(node, "min_score", loop.min_score);
+  read(node, "sparse_min_score", loop.sparse_min_score);
+  read(node, "max_window_m", loop.max_window_m);
+  read(node, "max_window_rad", loop.max_window_rad);
+  read(node, "confirm_after_s", loop.confirm_after_s);
+}
+
+void readSlam2d(const YAML::Node& node, Slam2dConfig& slam2d) {
+  rejectUnknownKeys(node, {"calibrations", "resolution_m", "range_min_m", "range_max_m", "use_odometry",
+                           "map_update_distance_m", "map_update_angle_rad", "reflectivity_weight",
+                           "self_calibration", "loop_closure"},
+                    "slam2d");
+  if (!node) return;
+  if (const YAML::Node files = node["calibrations"]) {
+    for (const auto& [model, file] : files.as<std::map<std::string, std::string>>()) {
+      slam2d.calibration_files[model] = file;
+    }
+  }
+  slam2d::Slam2dOptions& o = slam2d.options;
+  read(node, "resolution_m", o.resolution_m);
+  read(node, "range_min_m", o.range_min_m);
+  read(node, "range_max_m", o.range_max_m);
+  read(node, "use_odometry", o.use_odometry);
+  read(node, "map_update_distance_m", o.map_update_distance_m);
+  read(node, "map_update_angle_rad", o.map_update_angle_rad);
+  read(node, "reflectivity_weight", o.reflectivity_weight);
+  read(node, "self_calibration", o.self_calibration);
+  readSlam2dLoopClosure(node["loop_closure"], o.loop_closure);
 }
 
 }  // namespace
@@ -87,6 +149,10 @@ size_t batchRequestBytes(size_t points) {
 void loadConfigFile(const std::filesystem::path& file, Config& config) {
   try {
     const YAML::Node root = YAML::LoadFile(file.string());
+    if (root.IsNull()) return;  // an empty file
+    rejectUnknownKeys(root, {"listen", "data_dir", "web_root", "io_threads", "snapshot_interval_s", "viewer_tick_ms",
+                             "log_level", "auth", "tls", "limits", "maps", "loop_closure", "slam2d"},
+                      "");
     if (const YAML::Node listen = root["listen"]) setListenAddress(listen.as<std::string>(), config);
     if (const YAML::Node dir = root["data_dir"]) config.data_dir = dir.as<std::string>();
     if (const YAML::Node dir = root["web_root"]) config.web_root = dir.as<std::string>();
@@ -96,23 +162,19 @@ void loadConfigFile(const std::filesystem::path& file, Config& config) {
     read(root, "log_level", config.log_level);
     readAuth(root["auth"], config.auth);
     if (const YAML::Node tls = root["tls"]) {
+      rejectUnknownKeys(tls, {"certificate_file", "private_key_file"}, "tls");
       if (const YAML::Node file = tls["certificate_file"]) config.tls.certificate_file = file.as<std::string>();
       if (const YAML::Node file = tls["private_key_file"]) config.tls.private_key_file = file.as<std::string>();
     }
     readLimits(root["limits"], config.limits);
     readMaps(root["maps"], config.maps);
     if (const YAML::Node loop = root["loop_closure"]) {
+      rejectUnknownKeys(loop, {"camera", "cloud_intensity", "reflectivity_patches"}, "loop_closure");
       read(loop, "camera", config.loop_closure.camera);
       read(loop, "cloud_intensity", config.loop_closure.cloud_intensity);
       read(loop, "reflectivity_patches", config.loop_closure.reflectivity_patches);
     }
-    if (const YAML::Node slam2d = root["slam2d"]) {
-      if (const YAML::Node files = slam2d["calibrations"]) {
-        for (const auto& [model, file] : files.as<std::map<std::string, std::string>>()) {
-          config.slam2d.calibration_files[model] = file;
-        }
-      }
-    }
+    readSlam2d(root["slam2d"], config.slam2d);
   } catch (const std::exception& e) {
     throw std::runtime_error("config " + file.string() + ": " + e.what());
   }
@@ -199,6 +261,11 @@ void validate(const Config& config) {
   }
   // The map checks its own parameters; building an empty one is cheap.
   map3d::CuboidMap probe(config.maps.resolution_m, config.maps.occupancy, config.maps.fusion);
+  try {
+    config.slam2d.options.validate();
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(std::string("slam2d: ") + e.what());
+  }
   loadCalibrations(config.slam2d);
 }
 

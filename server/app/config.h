@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "map3d/occupancy_params.h"
+#include "slam2d/slam2d.h"
 
 namespace rmap::app {
 
@@ -59,6 +60,9 @@ struct Slam2dConfig {
   /// scanner model, i.e. the `model` of a Hello's LASER_2D sensor; models
   /// without one are self-calibrated by the SLAM.
   std::map<std::string, std::filesystem::path> calibration_files;
+  /// Every map's 2D SLAM; the YAML sets the options a deployment tunes (docs/API.md §2),
+  /// the rest keep the defaults fixed across datasets.
+  slam2d::Slam2dOptions options;
 };
 
 /// Which images place recognition runs on, per map (server/loop's detector with its defaults).

@@ -72,7 +72,7 @@ MapWorker::MapWorker(std::string name, std::unique_ptr<map3d::CuboidMap> map, in
       metrics_(metrics),
       pose_sink_(std::move(pose_sink)),
 
-      slam2d_(slam2d.calibrations, metrics),
+      slam2d_(config.slam2d.options, slam2d.calibrations, metrics),
       sensors_(slam2d.sensors),
       estimate_sink_(std::move(slam2d.estimate_sink)),
       slam_first_input_id_(slam2d.first_input_id),

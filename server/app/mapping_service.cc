@@ -81,7 +81,7 @@ MappingService::MappingService(Config config, std::optional<RecognizerFactory> r
       memory_bound_(config_.limits.max_memory_bytes),
       viewers_(metrics_, config_.limits.viewer_send_queue_bytes),
       calibrations_(loadCalibrations(config_.slam2d)),
-      recognizers_(recognizers ? std::move(*recognizers) : bowRecognizers(config_.loop_closure)) {
+      recognizers_(recognizers ? std::move(*recognizers) : bowRecognizers(config_.loop_closure, config_.slam2d.options.loop_closure)) {
   store_ = store::Store::open(config_.data_dir);
   loadSlam2dEvents();
   // Event ids are never reused, so the id of this start's event exceeds every earlier epoch.

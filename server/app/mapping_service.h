@@ -40,7 +40,8 @@ class MappingService {
  public:
   /// Opens the store under config.data_dir and recovers the maps.
   /// @param recognizers  place recognition per map and kind of frame (nullptr from the
-  ///                     factory: that kind is off); by default bowRecognizers(config.loop_closure)
+  ///                     factory: that kind is off); by default bowRecognizers(config.loop_closure,
+  ///                     config.slam2d.options.loop_closure)
   /// @throws store::StoreError, std::runtime_error with a clear message
   explicit MappingService(Config config, std::optional<RecognizerFactory> recognizers = std::nullopt);
   /// Stops the tick thread, drains the committer and the workers (final snapshots).

@@ -63,7 +63,8 @@ Calibrations loadCalibrations(const Slam2dConfig& config) {
   return out;
 }
 
-Slam2dLayer::Slam2dLayer(const Calibrations& calibrations, Metrics& metrics) : metrics_(metrics) {
+Slam2dLayer::Slam2dLayer(const slam2d::Slam2dOptions& options, const Calibrations& calibrations, Metrics& metrics)
+    : metrics_(metrics), slam_(options) {
   for (const auto& [model, calibration] : calibrations) slam_.setCalibration(model, calibration);
 }
 

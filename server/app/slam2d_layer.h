@@ -43,8 +43,9 @@ struct Slam2dResult {
 
 class Slam2dLayer {
  public:
+  /// @param options       the SLAM's options (rmapd: Slam2dConfig::options, validated with the config)
   /// @param calibrations  per scanner model; other models are self-calibrated by the SLAM
-  Slam2dLayer(const Calibrations& calibrations, Metrics& metrics);
+  Slam2dLayer(const slam2d::Slam2dOptions& options, const Calibrations& calibrations, Metrics& metrics);
 
   /// Processes a scan of `robot_id` taken with `laser` (identity mount and no
   /// model when the robot declared none). Odometry: the scan's own, else the

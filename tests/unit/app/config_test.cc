@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <functional>
 #include <stdexcept>
 #include <string>
 
@@ -192,7 +193,10 @@ TEST(SetListenAddress, RejectsUnbalancedOrEmptyBrackets) {
   }
 }
 
-TEST(Validate, AcceptsTheDefaults) { EXPECT_NO_THROW(validate(Config{})); }
+TEST(Validate, AcceptsTheDefaults) {
+  const Config defaults;
+  EXPECT_NO_THROW(validate(defaults));
+}
 
 TEST(Validate, RejectsAnEmptyWebRoot) {
   Config config;
@@ -203,7 +207,8 @@ TEST(Validate, RejectsAnEmptyWebRoot) {
 TEST(DefaultWebRoot, IsTheBuildsWebDirectory) {
   // CMake sets RMAP_WEB_ROOT to the source tree's web/ unless told otherwise.
   EXPECT_TRUE(defaultWebRoot().is_absolute()) << defaultWebRoot();
-  EXPECT_EQ(Config{}.web_root, defaultWebRoot());
+  const Config defaults;
+  EXPECT_EQ(defaults.web_root, defaultWebRoot());
 }
 
 TEST(Validate, RejectsARobotTokenWithoutRobotId) {
@@ -230,19 +235,23 @@ TEST(Validate, RejectsBadResolutions) {
   }
 }
 
-TEST(Validate, RejectsBadCounts) {
+/// Whether validate() refuses the defaults changed by `change`.
+bool refused(const std::function<void(Config&)>& change) {
   Config config;
-  config.io_threads = 0;
-  EXPECT_THROW(validate(config), std::invalid_argument);
-  config = Config{};
-  config.maps.insert_threads = 0;
-  EXPECT_THROW(validate(config), std::invalid_argument);
-  config = Config{};
-  config.viewer_tick_ms = 9;
-  EXPECT_THROW(validate(config), std::invalid_argument);
-  config = Config{};
-  config.log_level = "verbose";
-  EXPECT_THROW(validate(config), std::invalid_argument);
+  change(config);
+  try {
+    validate(config);
+  } catch (const std::invalid_argument&) {
+    return true;
+  }
+  return false;
+}
+
+TEST(Validate, RejectsBadCounts) {
+  EXPECT_TRUE(refused([](Config& c) { c.io_threads = 0; }));
+  EXPECT_TRUE(refused([](Config& c) { c.maps.insert_threads = 0; }));
+  EXPECT_TRUE(refused([](Config& c) { c.viewer_tick_ms = 9; }));
+  EXPECT_TRUE(refused([](Config& c) { c.log_level = "verbose"; }));
 }
 
 TEST(Validate, ZeroSizeLimitsAreRefusedNotReadAsUnlimited) {
@@ -269,11 +278,9 @@ TEST(Validate, ABatchOfMaxBatchPointsMustFitInTheBodyLimit) {
     EXPECT_THROW(validate(config), std::invalid_argument) << points;
   }
   EXPECT_EQ(batchRequestBytes(0), 0u);
-  config = Config{};
-  config.limits.max_batch_points = 10'000'000;  // 240 MB of doubles against 64 MiB
-  EXPECT_THROW(validate(config), std::invalid_argument);
-  config.limits.max_batch_points = SIZE_MAX;
-  EXPECT_THROW(validate(config), std::invalid_argument);
+  // 240 MB of doubles against 64 MiB
+  EXPECT_TRUE(refused([](Config& c) { c.limits.max_batch_points = 10'000'000; }));
+  EXPECT_TRUE(refused([](Config& c) { c.limits.max_batch_points = SIZE_MAX; }));
 }
 
 TEST(LoadConfigFile, ReadsTheTlsFiles) {
@@ -339,6 +346,82 @@ TEST(Slam2dCalibrations, AMissingOrBadFileIsRefusedNamingTheModel) {
   const YamlFile bad("rmap_intensity_calibration 1\nrange_m 5 1\n");
   config.slam2d.calibration_files["utm"] = bad.path();
   EXPECT_THROW(validate(config), std::invalid_argument);
+}
+
+TEST(Slam2dOptions, TheFileSetsTheTunedOptionsAndKeepsTheRest) {
+  const YamlFile file(R"(
+slam2d:
+  resolution_m: 0.1
+  range_min_m: 0.3
+  range_max_m: 12
+  use_odometry: false
+  map_update_distance_m: 0.4
+  map_update_angle_rad: 0.2
+  reflectivity_weight: 0.5
+  self_calibration: false
+  loop_closure:
+    enabled: false
+    min_score: 0.62
+    sparse_min_score: 0.75
+    max_window_m: 3
+    max_window_rad: 0.5
+    confirm_after_s: 0
+)");
+  Config config;
+  loadConfigFile(file.path(), config);
+  const slam2d::Slam2dOptions& o = config.slam2d.options;
+  const slam2d::Slam2dOptions defaults;
+  EXPECT_EQ(o.resolution_m, 0.1);
+  EXPECT_EQ(o.range_min_m, 0.3f);
+  EXPECT_EQ(o.range_max_m, 12.0f);
+  EXPECT_FALSE(o.use_odometry);
+  EXPECT_EQ(o.map_update_distance_m, 0.4);
+  EXPECT_EQ(o.map_update_angle_rad, 0.2);
+  EXPECT_EQ(o.reflectivity_weight, 0.5);
+  EXPECT_FALSE(o.self_calibration);
+  EXPECT_FALSE(o.loop_closure.enabled);
+  EXPECT_EQ(o.loop_closure.min_score, 0.62);
+  EXPECT_EQ(o.loop_closure.sparse_min_score, 0.75);
+  EXPECT_EQ(o.loop_closure.max_window_m, 3.0);
+  EXPECT_EQ(o.loop_closure.max_window_rad, 0.5);
+  EXPECT_EQ(o.loop_closure.confirm_after_s, 0.0);
+  EXPECT_EQ(o.levels, defaults.levels);
+  EXPECT_EQ(o.loop_closure.submap_keyframes, defaults.loop_closure.submap_keyframes);
+  EXPECT_NO_THROW(validate(config));
+}
+
+TEST(Slam2dOptions, BadValuesAreRefusedNamingTheSection) {
+  for (const char* text : {"slam2d:\n  resolution_m: 0\n", "slam2d:\n  range_max_m: -1\n",
+                           "slam2d:\n  loop_closure:\n    min_score: 1.5\n",
+                           "slam2d:\n  loop_closure:\n    confirm_after_s: -1\n"}) {
+    const YamlFile file(text);
+    Config config;
+    loadConfigFile(file.path(), config);
+    try {
+      validate(config);
+      ADD_FAILURE() << "accepted: " << text;
+    } catch (const std::invalid_argument& e) {
+      EXPECT_EQ(std::string(e.what()).rfind("slam2d: ", 0), 0u) << e.what();
+    }
+  }
+}
+
+TEST(LoadConfigFile, UnknownKeysAreRefusedWithTheirPath) {
+  // A misspelt key would otherwise leave its default in place without a word.
+  EXPECT_NE(loadError("io_thread: 4\n").find("unknown key 'io_thread'"), std::string::npos);
+  EXPECT_NE(loadError("limits:\n  max_frame_byte: 10\n").find("unknown key 'limits.max_frame_byte'"),
+            std::string::npos);
+  EXPECT_NE(loadError("maps:\n  resolution: 0.2\n").find("'maps.resolution'"), std::string::npos);
+  EXPECT_NE(loadError("auth:\n  tokens:\n    - {token: some-secret, role: admin, robot: r1}\n")
+                .find("'auth.tokens[].robot'"),
+            std::string::npos);
+  EXPECT_NE(loadError("tls:\n  certificate: a.pem\n").find("'tls.certificate'"), std::string::npos);
+  EXPECT_NE(loadError("loop_closure:\n  cameras: false\n").find("'loop_closure.cameras'"), std::string::npos);
+  EXPECT_NE(loadError("slam2d:\n  loop_closure:\n    min_scor: 0.7\n").find("'slam2d.loop_closure.min_scor'"),
+            std::string::npos);
+  EXPECT_NE(loadError("slam2d: 3\n").find("slam2d must be a mapping"), std::string::npos);
+  EXPECT_EQ(loadError(""), "") << "an empty file sets nothing";
+  EXPECT_EQ(loadError("limits:\n"), "") << "an empty section sets nothing";
 }
 
 }  // namespace

@@ -52,19 +52,17 @@ TEST(MapWorker, AnIdleMapFusesItsHotBlocksWithoutChangingACell) {
   EXPECT_EQ(ray_before.state, map3d::CellState::kFree);
 }
 
-// A robot that stops right after closing a loop: the closures still waiting for a
-// later optimisation (LoopClosureOptions::confirm_after_s) are stored once the map's
-// ingest paused, as the end of a log gives them.
-TEST(MapWorker, ClosuresWaitingWhenARobotStopsAreStoredOnceTheMapIsIdle) {
+/// A 2D-laser robot (laser at the base, no Hello describing it) that drives out along a tour
+/// of a simulated building and 80 steps back over it, then stops: closures on the way back,
+/// the last ones within LoopClosureOptions::confirm_after_s when it stops.
+std::vector<v1::RobotMessage> scansOutAndBackThenStop() {
   const sim::VoxelWorld world = sim::makeBuilding(sim::BuildingOptions{}, 7);
   sim::TrajectoryOptions tour;
   tour.num_poses = 120;
   tour.step_m = 0.26;
   client::Laser2dRobotOptions laser;
   laser.laser = sim::Laser2dModel::sickLike();
-  laser.mount_forward_m = 0.0;  // the laser at the base: this robot sends no Hello describing it
-  // Out along the tour and 80 steps back over it: closures on the way back, the last ones
-  // within the hold when it stops.
+  laser.mount_forward_m = 0.0;
   client::Laser2dRobot robot(world, sim::planTrajectory(world, tour, 3), laser, 41);
   std::vector<v1::RobotMessage> messages;
   constexpr uint64_t kStops = 200;  // steps before the robot stops
@@ -75,10 +73,30 @@ TEST(MapWorker, ClosuresWaitingWhenARobotStopsAreStoredOnceTheMapIsIdle) {
     m.mutable_scan()->set_stamp_ns(static_cast<int64_t>(seq) * 100'000'000);
     messages.push_back(std::move(m));
   }
+  return messages;
+}
+
+/// Applies `messages` to map "lab" of `service` and waits until the last one is applied.
+void applyAll(MappingService& service, MapWorker& map, const std::vector<v1::RobotMessage>& messages) {
+  std::promise<void> applied;
+  for (size_t k = 0; k < messages.size(); ++k)
+    service.apply(map, static_cast<int64_t>(k + 1), std::make_shared<v1::RobotMessage>(messages[k]), "bot",
+                  k + 1 == messages.size() ? std::function<void()>([&] { applied.set_value(); }) : nullptr);
+  applied.get_future().wait();
+}
+
+size_t storedGeometryClosures(MappingService& service) {
+  return service.store().loopClosures({"lab", "", "geometry", 0, 100000}).size();
+}
+
+// A robot that stops right after closing a loop: the closures still waiting for a
+// later optimisation are stored once the map's ingest paused, as the end of a log gives them.
+TEST(MapWorker, ClosuresWaitingWhenARobotStopsAreStoredOnceTheMapIsIdle) {
+  const std::vector<v1::RobotMessage> messages = scansOutAndBackThenStop();
 
   // The same scans through a 2D SLAM layer of its own: what the map must store.
   Metrics metrics;
-  Slam2dLayer reference({}, metrics);
+  Slam2dLayer reference(slam2d::Slam2dOptions{}, {}, metrics);
   size_t at_scans = 0;
   for (const v1::RobotMessage& m : messages)
     if (const std::optional<Slam2dResult> r = reference.addScan("bot", m.scan(), std::nullopt))
@@ -90,18 +108,32 @@ TEST(MapWorker, ClosuresWaitingWhenARobotStopsAreStoredOnceTheMapIsIdle) {
   store::TempDir dir;
   MappingService service(testing::configIn(dir.path()));
   const std::shared_ptr<MapWorker> map = service.openMap("lab", 0.1);
-  std::promise<void> applied;
-  for (size_t k = 0; k < messages.size(); ++k)
-    service.apply(*map, static_cast<int64_t>(k + 1), std::make_shared<v1::RobotMessage>(messages[k]), "bot",
-                  k + 1 == messages.size() ? std::function<void()>([&] { applied.set_value(); }) : nullptr);
-  applied.get_future().wait();
+  applyAll(service, *map, messages);
   size_t stored = 0;
   for (int i = 0; i < 100 && stored < at_scans + at_pause; ++i) {
     std::this_thread::sleep_for(std::chrono::milliseconds(100));
-    stored = service.store().loopClosures({"lab", "", "geometry", 0, 100000}).size();
+    stored = storedGeometryClosures(service);
   }
   EXPECT_EQ(stored, at_scans + at_pause) << at_scans << " closures came with the scans, " << at_pause
                                          << " should have come once the map was idle";
+}
+
+// rmapd's config sets the 2D SLAM of every map (Slam2dConfig::options): here a coarser
+// grid and no geometric loop closure, on the drive that closes loops by default (above).
+TEST(MapWorker, TheSlamOfAMapTakesTheConfiguredOptions) {
+  store::TempDir dir;
+  Config config = testing::configIn(dir.path());
+  config.slam2d.options.resolution_m = 0.1;
+  config.slam2d.options.loop_closure.enabled = false;
+  MappingService service(config);
+  const std::shared_ptr<MapWorker> map = service.openMap("lab", 0.1);
+  applyAll(service, *map, scansOutAndBackThenStop());
+  // Past the idle delay after which waiting closures would be stored.
+  std::this_thread::sleep_for(std::chrono::milliseconds(2500));
+
+  EXPECT_EQ(map->slam2d().scans(), 200u);
+  EXPECT_EQ(storedGeometryClosures(service), 0u);
+  map->slam2d().read([](const Grid2dSource& grid) { EXPECT_DOUBLE_EQ(grid.resolutionM(), 0.1); });
 }
 
 }  // namespace
