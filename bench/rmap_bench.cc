@@ -92,6 +92,13 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"auto", "logged", "odom-increments", "none"}));
   d->add_flag_callback("--no-odometry", [&] { slam2d.odometry = "none"; }, "same as --odometry none");
   d->add_option("--max-scans", slam2d.max_scans, "only the first N scans (0: all)");
+  d->add_option("--repeat", slam2d.repeat,
+                "runs of the log: the first as it is, the others from seeded other starts (rigid moves); "
+                "JSON `repeated` gives each run and the median ATE")
+      ->check(CLI::Range(1, 1000));
+  d->add_option("--start", slam2d.start,
+                "X_M Y_M THETA_RAD: the run moved to this start, as --repeat moves its runs (one of them in full)")
+      ->expected(3);
   d->add_option("--rpe-distance", slam2d.rpe_distance_m, "travel of the RPE pairs, metres")->check(CLI::PositiveNumber);
   d->add_option("--sim-laser", slam2d.sim.laser, "simulated 2D laser preset")->check(CLI::IsMember({"sick", "hokuyo"}));
   d->add_option("--sim-poses", slam2d.sim.poses, "simulated path poses (0.1 m apart)")->check(CLI::Range(2, 1000000));

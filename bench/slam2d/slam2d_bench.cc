@@ -10,6 +10,7 @@
 #include <iostream>
 #include <nlohmann/json.hpp>
 #include <numbers>
+#include <random>
 #include <stdexcept>
 
 #include <opencv2/core.hpp>
@@ -158,6 +159,129 @@ void writeMapImage(const std::string& path, const slam2d::GridMap2d& grid, int m
   if (!cv::imwrite(path, image)) throw std::runtime_error("cannot write " + path);
 }
 
+/// The closures of a finished run: reported during it, confirmed at its end (the log ended:
+/// closures still waiting for a later optimisation count too), and withdrawn.
+struct RunClosures {
+  std::vector<slam2d::LoopClosure2d> reported, confirmed_at_end, withdrawn;
+};
+
+RunClosures takeClosures(slam2d::Slam2d& slam) {
+  RunClosures c;
+  c.reported = slam.takeLoopClosures();
+  slam.confirmLoopClosures();
+  c.confirmed_at_end = slam.takeLoopClosures();
+  c.reported.insert(c.reported.end(), c.confirmed_at_end.begin(), c.confirmed_at_end.end());
+  c.withdrawn = slam.takeWithdrawnLoopClosures();
+  return c;
+}
+
+JudgedRun judgedRun(const std::vector<Slam2dInput>& inputs, const std::vector<Pose2>& laser_poses) {
+  JudgedRun run{{}, {}, laser_poses};
+  for (const Slam2dInput& in : inputs) {
+    run.stamps_ns.push_back(in.scan.stamp_ns);
+    run.sensor_mounts.push_back(in.scan.sensor_mount);
+  }
+  return run;
+}
+
+/// Judges: each corrected log of the same run (scans found by their ranges), else the reference poses.
+std::vector<ClosureJudge> closureJudges(const Slam2dBenchOptions& options, const Slam2dDataset& data) {
+  std::vector<ClosureJudge> judges;
+  std::vector<int64_t> stamps_ns;
+  for (const Slam2dInput& in : data.inputs) stamps_ns.push_back(in.scan.stamp_ns);
+  const std::unordered_map<int64_t, size_t> input_of_stamp = uniqueStampIndex(stamps_ns);
+  for (const std::string& path : options.closure_reference_paths) {
+    Slam2dSourceOptions ref_source;
+    ref_source.stamps_path = options.source;
+    ref_source.odometry = OdometrySource::kNone;
+    const Slam2dDataset ref = loadSlam2dDataset(path, ref_source);
+    ClosureJudge judge{"poses of " + path + " (" + std::to_string(ref.stamps_replaced) + " scans found)",
+                       std::vector<std::optional<Pose2>>(data.inputs.size())};
+    for (size_t k = 0; k < ref.inputs.size(); ++k) {
+      const auto it = input_of_stamp.find(ref.inputs[k].scan.stamp_ns);
+      if (it != input_of_stamp.end() && ref.reference[k]) judge.reference[it->second] = ref.reference[k];
+    }
+    judges.push_back(std::move(judge));
+  }
+  if (judges.empty() && data.reference_kind.find("raw odometry") == std::string::npos)
+    judges.push_back({data.reference_kind, data.reference});
+  return judges;
+}
+
+/// The same run started elsewhere: every odometry pose moved by the rigid motion `start` (the
+/// odometry's steps are unchanged), or, in a run without odometry, the first scan placed at
+/// `start`. Only where the map's grid lies under the run changes, which on its own sends some
+/// logs' runs elsewhere (BENCHMARKS.md §4).
+/// @throws std::invalid_argument for a run whose first scan has no odometry but later ones do
+std::vector<Slam2dInput> startedAt(const std::vector<Slam2dInput>& inputs, const Pose2& start) {
+  std::vector<Slam2dInput> out = inputs;
+  if (out.empty()) return out;
+  const bool any_odometry = std::any_of(out.begin(), out.end(), [](const Slam2dInput& in) { return in.odometry; });
+  if (!any_odometry) {
+    out.front().odometry = start;  // a new trajectory starts at its first odometry pose
+    return out;
+  }
+  if (!out.front().odometry)
+    throw std::invalid_argument("the first scan has no odometry but later ones do: the run cannot be moved (--repeat, --start)");
+  for (Slam2dInput& in : out)
+    if (in.odometry) in.odometry = start * *in.odometry;
+  return out;
+}
+
+/// Runs 2..n of --repeat: the run from n − 1 other starts (seeded, so reproducible), each
+/// scored as the headline run is. @return JSON: runs [{start, ate_m, rpe_1m_m, rel_trans_err_m,
+/// closures, false_closures, false_against_submap, cpu_s}] (the first is `first_run`) and the
+/// median, min and max of ATE over all n runs
+json repeatedRuns(const Slam2dBenchOptions& options, const Slam2dDataset& data, const std::vector<ClosureJudge>& judges,
+                  const json& first_run) {
+  json runs = json::array({first_run});
+  std::mt19937_64 random(1);
+  std::uniform_real_distribution<double> offset_m(0.0, 1.0), heading_rad(-std::numbers::pi, std::numbers::pi);
+  for (int k = 1; k < options.repeat; ++k) {
+    const Pose2 start{offset_m(random), offset_m(random), heading_rad(random)};
+    const std::vector<Slam2dInput> inputs = startedAt(data.inputs, start);
+    slam2d::Slam2d slam(options.slam);
+    const SlamRun run = runSlam(slam, inputs);
+    const RunClosures closures = takeClosures(slam);
+    const Paired scored = paired(inputs, run.laser_poses, data.reference);
+    json one = {{"start", {start.x_m, start.y_m, start.theta_rad}},
+                {"ate_m", absoluteTrajectoryError(scored.estimate, scored.reference).rmse},
+                {"rpe_1m_m", relativePoseError(scored.estimate, scored.reference, options.rpe_distance_m).translation_m.rmse},
+                {"rel_trans_err_m", relationErrors(stamped(inputs, run.laser_poses), data.relations).translation_m.mean},
+                {"cpu_s", run.cpu_s}};
+    if (slam.loopClosureStats()) {
+      const json judged = judgeClosures(closures.reported, closures.withdrawn, judgedRun(inputs, run.laser_poses), judges);
+      for (const char* key : {"closures", "false_closures", "false_against_submap"}) one[key] = judged[key];
+    }
+    std::printf("run %d of %d, started at (%.3f m, %.3f m, %.1f°): ATE %.4f m", k + 1, options.repeat, start.x_m,
+                start.y_m, start.theta_rad * kDegPerRad, one["ate_m"].get<double>());
+    if (one.contains("closures")) {
+      if (one["false_closures"].is_null())
+        std::printf(", %zu closures (not judged)", one["closures"].get<size_t>());
+      else
+        std::printf(", %zu closures (%zu false, %zu against the whole submap)", one["closures"].get<size_t>(),
+                    one["false_closures"].get<size_t>(), one["false_against_submap"].get<size_t>());
+    }
+    std::printf(", %.1f s CPU\n", run.cpu_s);
+    runs.push_back(std::move(one));
+  }
+  json out = {{"runs", runs}};
+  // Median, min and max of one figure over the runs, into out as KEY_median, KEY_min, KEY_max.
+  const auto spread = [&](const char* key, const char* what) {
+    std::vector<double> v;
+    for (const json& r : runs) v.push_back(r[key].get<double>());
+    std::sort(v.begin(), v.end());
+    const double median = v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
+    out[std::string(key) + "_median"] = median;
+    out[std::string(key) + "_min"] = v.front();
+    out[std::string(key) + "_max"] = v.back();
+    std::printf("%s over %zu starts: median %.4f m, min %.4f, max %.4f\n", what, v.size(), median, v.front(), v.back());
+  };
+  spread("ate_m", "ATE");
+  if (!data.relations.empty()) spread("rel_trans_err_m", "relation error (mean)");
+  return out;
+}
+
 }  // namespace
 
 int runSlam2dBench(const Slam2dBenchOptions& options) {
@@ -178,17 +302,22 @@ int runSlam2dBench(const Slam2dBenchOptions& options) {
     const auto [lo, hi] = std::minmax_element(stamps.begin(), stamps.end());
     if (data.duration_s) data.duration_s = double(*hi - *lo) * 1e-9;
   }
+  Pose2 start;
+  if (!options.start.empty()) {
+    if (options.start.size() != 3) throw std::invalid_argument("--start needs x_m y_m theta_rad");
+    // Runs 2..n of --repeat are moves of the logged run; one run of them is reproduced alone.
+    if (options.repeat > 1) throw std::invalid_argument("--start reproduces one run: not with --repeat");
+    start = {options.start[0], options.start[1], options.start[2]};
+    data.inputs = startedAt(data.inputs, start);
+  }
   std::cout << data.name << ": " << data.inputs.size() << " scans, odometry: " << data.odometry_kind
             << ", reference: " << data.reference_kind << std::endl;
 
   slam2d::Slam2d slam(options.slam);
   const SlamRun run = runSlam(slam, data.inputs);
-  std::vector<slam2d::LoopClosure2d> closures = slam.takeLoopClosures();
-  // The log ended: closures still waiting for a later optimisation count too.
-  slam.confirmLoopClosures();
-  const std::vector<slam2d::LoopClosure2d> confirmed_at_end = slam.takeLoopClosures();
-  closures.insert(closures.end(), confirmed_at_end.begin(), confirmed_at_end.end());
-  const std::vector<slam2d::LoopClosure2d> withdrawn = slam.takeWithdrawnLoopClosures();
+  const RunClosures run_closures = takeClosures(slam);
+  const std::vector<slam2d::LoopClosure2d>& closures = run_closures.reported;
+  const std::vector<slam2d::LoopClosure2d>& confirmed_at_end = run_closures.confirmed_at_end;
 
   const RelationErrors rel = relationErrors(stamped(data.inputs, run.laser_poses), data.relations);
   const Paired scored = paired(data.inputs, run.laser_poses, data.reference);
@@ -233,31 +362,11 @@ int runSlam2dBench(const Slam2dBenchOptions& options) {
             {"slam_options", slamOptionsJson(options.slam)},
             {"machine", machineJson()}};
   if (!run.first_rejection.empty()) r["first_rejection"] = run.first_rejection;
+  const std::vector<ClosureJudge> judges =
+      slam.loopClosureStats() ? closureJudges(options, data) : std::vector<ClosureJudge>{};
   if (const slam2d::LoopClosureStats* lc = slam.loopClosureStats()) {
-    JudgedRun judged_run{{}, {}, run.laser_poses};
-    for (const Slam2dInput& in : data.inputs) {
-      judged_run.stamps_ns.push_back(in.scan.stamp_ns);
-      judged_run.sensor_mounts.push_back(in.scan.sensor_mount);
-    }
-    // Judges: each corrected log of the same run (scans found by their ranges), else the reference poses.
-    std::vector<ClosureJudge> judges;
-    const std::unordered_map<int64_t, size_t> input_of_stamp = uniqueStampIndex(judged_run.stamps_ns);
-    for (const std::string& path : options.closure_reference_paths) {
-      Slam2dSourceOptions ref_source;
-      ref_source.stamps_path = options.source;
-      ref_source.odometry = OdometrySource::kNone;
-      const Slam2dDataset ref = loadSlam2dDataset(path, ref_source);
-      ClosureJudge judge{"poses of " + path + " (" + std::to_string(ref.stamps_replaced) + " scans found)",
-                         std::vector<std::optional<Pose2>>(data.inputs.size())};
-      for (size_t k = 0; k < ref.inputs.size(); ++k) {
-        const auto it = input_of_stamp.find(ref.inputs[k].scan.stamp_ns);
-        if (it != input_of_stamp.end() && ref.reference[k]) judge.reference[it->second] = ref.reference[k];
-      }
-      judges.push_back(std::move(judge));
-    }
-    if (judges.empty() && data.reference_kind.find("raw odometry") == std::string::npos)
-      judges.push_back({data.reference_kind, data.reference});
-    json lc_json = judgeClosures(closures, withdrawn, judged_run, judges);
+    const JudgedRun judged_run = judgedRun(data.inputs, run.laser_poses);
+    json lc_json = judgeClosures(closures, run_closures.withdrawn, judged_run, judges);
     if (judges.empty()) lc_json["judged_by"] = "none (raw odometry is no reference)";
     lc_json.update({{"keyframes", slam.keyframeCount()},
                     {"searches", lc->searches},
@@ -370,6 +479,14 @@ int runSlam2dBench(const Slam2dBenchOptions& options) {
                 ate.rmse, r["reflectivity_rel_err_median"].get<double>(), r["reflectivity"]["scale"].get<double>(),
                 r["reflectivity"]["cells_compared"].get<size_t>(), r["reflectivity_spread_raw"].get<double>(),
                 r["reflectivity_spread_calibrated"].get<double>());
+  }
+  if (options.repeat > 1) {
+    json first = {{"start", {start.x_m, start.y_m, start.theta_rad}}, {"ate_m", ate.rmse}, {"rpe_1m_m", rpe.translation_m.rmse},
+                  {"rel_trans_err_m", rel.translation_m.mean}, {"cpu_s", run.cpu_s}};
+    if (r.contains("loop_closure")) {
+      for (const char* key : {"closures", "false_closures", "false_against_submap"}) first[key] = r["loop_closure"][key];
+    }
+    r["repeated"] = repeatedRuns(options, data, judges, first);
   }
   if (!options.poses_out.empty()) writePoses(options.poses_out, data.inputs, run.laser_poses);
   if (!options.map_image_out.empty()) writeMapImage(options.map_image_out, slam.grid(), options.map_image_max_px);
