@@ -310,6 +310,7 @@ int runSlam2dBench(const Slam2dBenchOptions& options) {
     start = {options.start[0], options.start[1], options.start[2]};
     data.inputs = startedAt(data.inputs, start);
   }
+  if (options.repeat > 1) startedAt(data.inputs, start);  // refuses a run it cannot move before the first run
   std::cout << data.name << ": " << data.inputs.size() << " scans, odometry: " << data.odometry_kind
             << ", reference: " << data.reference_kind << std::endl;
 
