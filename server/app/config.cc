@@ -5,11 +5,11 @@
 #include "app/slam2d_layer.h"
 #include "map3d/cuboid_map.h"
 
-#include <algorithm>
 #include <cmath>
 #include <set>
 #include <stdexcept>
-#include <string_view>
+#include <string>
+#include <utility>
 
 namespace rmap::app {
 
@@ -31,108 +31,136 @@ Role parseRole(const std::string& text) {
   throw std::invalid_argument("role must be robot, viewer or admin, not '" + text + "'");
 }
 
-template <typename T>
-void read(const YAML::Node& node, const char* key, T& value) {
-  if (const YAML::Node child = node[key]) value = child.as<T>();
-}
+/// One mapping of the file. Each key is named once, where it is read, and a
+/// key nobody read is refused when the section closes: a misspelt key would
+/// otherwise be ignored and its default used without a word.
+class Section {
+ public:
+  /// @param node  the mapping; absent or empty: a section without keys
+  /// @param path  its path in the file ("" for the top level), for messages
+  Section(const YAML::Node& node, std::string path)
+      : node_(node && !node.IsNull() ? node : YAML::Node(YAML::NodeType::Map)), path_(std::move(path)) {
+    if (!node_.IsMap()) throw std::invalid_argument((path_.empty() ? "the file" : path_) + " must be a mapping");
+  }
 
-/// A misspelt key would otherwise be ignored and its default used without a word.
-/// @param section  the mapping's path in the file ("" for the top level), for the message
-void rejectUnknownKeys(const YAML::Node& node, std::initializer_list<std::string_view> known,
-                       const std::string& section) {
-  if (!node || node.IsNull()) return;
-  if (!node.IsMap()) throw std::invalid_argument((section.empty() ? "the file" : section) + " must be a mapping");
-  for (const auto& entry : node) {
-    const std::string key = entry.first.as<std::string>();
-    if (std::find(known.begin(), known.end(), key) == known.end()) {
-      throw std::invalid_argument("unknown key '" + (section.empty() ? key : section + "." + key) + "'");
+  /// The value of `key`, absent: an undefined node (false).
+  YAML::Node child(const char* key) {
+    read_.insert(key);
+    return node_[key];
+  }
+  /// Sets `value` when the key is present, else leaves it.
+  template <typename T>
+  void read(const char* key, T& value) {
+    if (const YAML::Node child_node = child(key)) value = child_node.as<T>();
+  }
+  void read(const char* key, std::filesystem::path& value) {
+    if (const YAML::Node child_node = child(key)) value = child_node.as<std::string>();
+  }
+  /// @throws std::invalid_argument when the key is absent
+  template <typename T>
+  T required(const char* key) {
+    const YAML::Node child_node = child(key);
+    if (!child_node) throw std::invalid_argument(pathOf(key) + " is required");
+    return child_node.as<T>();
+  }
+  /// Reads the mapping at `key` with `fill(Section&)`, then refuses the keys it did not read.
+  template <typename Fill>
+  void section(const char* key, Fill&& fill);
+  std::string pathOf(const char* key) const { return path_.empty() ? key : path_ + "." + key; }
+
+  /// @throws std::invalid_argument naming the first key not read
+  void close() const {
+    for (const auto& entry : node_) {
+      const std::string key = entry.first.as<std::string>();
+      if (!read_.contains(key)) throw std::invalid_argument("unknown key '" + pathOf(key.c_str()) + "'");
     }
   }
+
+ private:
+  const YAML::Node node_;  // const: a lookup of an absent key must not add it
+  std::string path_;
+  std::set<std::string, std::less<>> read_;
+};
+
+/// Reads one section with `fill(Section&)`, then refuses the keys it did not read.
+template <typename Fill>
+void readSection(const YAML::Node& node, std::string path, Fill&& fill) {
+  Section section(node, std::move(path));
+  fill(section);
+  section.close();
 }
 
-void readAuth(const YAML::Node& node, AuthConfig& auth) {
-  if (!node) return;
-  rejectUnknownKeys(node, {"tokens", "allowed_origins"}, "auth");
-  if (const YAML::Node tokens = node["tokens"]) {
+template <typename Fill>
+void Section::section(const char* key, Fill&& fill) {
+  readSection(child(key), pathOf(key), std::forward<Fill>(fill));
+}
+
+void readAuth(Section& auth_section, AuthConfig& auth) {
+  if (const YAML::Node tokens = auth_section.child("tokens")) {
     auth.tokens.clear();
     for (const YAML::Node& t : tokens) {
-      rejectUnknownKeys(t, {"token", "role", "robot_id"}, "auth.tokens[]");
-      TokenConfig token;
-      token.token = t["token"].as<std::string>();
-      token.role = parseRole(t["role"].as<std::string>());
-      read(t, "robot_id", token.robot_id);
-      auth.tokens.push_back(std::move(token));
+      readSection(t, auth_section.pathOf("tokens") + "[]", [&](Section& s) {
+        TokenConfig token;
+        token.token = s.required<std::string>("token");
+        token.role = parseRole(s.required<std::string>("role"));
+        s.read("robot_id", token.robot_id);
+        auth.tokens.push_back(std::move(token));
+      });
     }
   }
-  if (const YAML::Node origins = node["allowed_origins"]) auth.allowed_origins = origins.as<std::vector<std::string>>();
+  if (const YAML::Node origins = auth_section.child("allowed_origins")) {
+    auth.allowed_origins = origins.as<std::vector<std::string>>();
+  }
 }
 
-void readLimits(const YAML::Node& node, LimitsConfig& limits) {
-  rejectUnknownKeys(node, {"max_frame_bytes", "max_body_bytes", "max_points_per_cloud", "max_batch_points",
-                           "max_in_flight_per_robot", "max_messages_per_s_per_robot", "viewer_send_queue_bytes",
-                           "max_box_cuboids", "max_import_blocks", "max_memory_bytes"},
-                    "limits");
-  if (!node) return;
-  read(node, "max_frame_bytes", limits.max_frame_bytes);
-  read(node, "max_body_bytes", limits.max_body_bytes);
-  read(node, "max_points_per_cloud", limits.max_points_per_cloud);
-  read(node, "max_batch_points", limits.max_batch_points);
-  read(node, "max_in_flight_per_robot", limits.max_in_flight_per_robot);
-  read(node, "max_messages_per_s_per_robot", limits.max_messages_per_s_per_robot);
-  read(node, "viewer_send_queue_bytes", limits.viewer_send_queue_bytes);
-  read(node, "max_box_cuboids", limits.max_box_cuboids);
-  read(node, "max_import_blocks", limits.max_import_blocks);
-  read(node, "max_memory_bytes", limits.max_memory_bytes);
+void readLimits(Section& s, LimitsConfig& limits) {
+  s.read("max_frame_bytes", limits.max_frame_bytes);
+  s.read("max_body_bytes", limits.max_body_bytes);
+  s.read("max_points_per_cloud", limits.max_points_per_cloud);
+  s.read("max_batch_points", limits.max_batch_points);
+  s.read("max_in_flight_per_robot", limits.max_in_flight_per_robot);
+  s.read("max_messages_per_s_per_robot", limits.max_messages_per_s_per_robot);
+  s.read("viewer_send_queue_bytes", limits.viewer_send_queue_bytes);
+  s.read("max_box_cuboids", limits.max_box_cuboids);
+  s.read("max_import_blocks", limits.max_import_blocks);
+  s.read("max_memory_bytes", limits.max_memory_bytes);
 }
 
-void readMaps(const YAML::Node& node, MapDefaults& maps) {
-  rejectUnknownKeys(node, {"resolution_m", "insert_threads", "max_range_m", "hit_log_odds", "miss_log_odds",
-                           "fusion_tolerance_log_odds"},
-                    "maps");
-  if (!node) return;
-  read(node, "resolution_m", maps.resolution_m);
-  read(node, "insert_threads", maps.insert_threads);
-  read(node, "max_range_m", maps.occupancy.max_range_m);
-  read(node, "hit_log_odds", maps.occupancy.hit_log_odds);
-  read(node, "miss_log_odds", maps.occupancy.miss_log_odds);
-  read(node, "fusion_tolerance_log_odds", maps.fusion.tolerance_log_odds);
+void readMaps(Section& s, MapDefaults& maps) {
+  s.read("resolution_m", maps.resolution_m);
+  s.read("insert_threads", maps.insert_threads);
+  s.read("max_range_m", maps.occupancy.max_range_m);
+  s.read("hit_log_odds", maps.occupancy.hit_log_odds);
+  s.read("miss_log_odds", maps.occupancy.miss_log_odds);
+  s.read("fusion_tolerance_log_odds", maps.fusion.tolerance_log_odds);
 }
 
 /// The geometric loop closure of the 2D SLAM: the options a deployment tunes.
-void readSlam2dLoopClosure(const YAML::Node& node, slam2d::LoopClosureOptions& loop) {
-  rejectUnknownKeys(node, {"enabled", "min_score", "sparse_min_score", "max_window_m", "max_window_rad",
-                           "confirm_after_s"},
-                    "slam2d.loop_closure");
-  if (!node) return;
-  read(node, "enabled", loop.enabled);
-  read(node, "min_score", loop.min_score);
-  read(node, "sparse_min_score", loop.sparse_min_score);
-  read(node, "max_window_m", loop.max_window_m);
-  read(node, "max_window_rad", loop.max_window_rad);
-  read(node, "confirm_after_s", loop.confirm_after_s);
+void readSlam2dLoopClosure(Section& s, slam2d::LoopClosureOptions& loop) {
+  s.read("enabled", loop.enabled);
+  s.read("min_score", loop.min_score);
+  s.read("sparse_min_score", loop.sparse_min_score);
+  s.read("max_window_m", loop.max_window_m);
+  s.read("max_window_rad", loop.max_window_rad);
+  s.read("confirm_after_s", loop.confirm_after_s);
 }
 
-void readSlam2d(const YAML::Node& node, Slam2dConfig& slam2d) {
-  rejectUnknownKeys(node, {"calibrations", "resolution_m", "range_min_m", "range_max_m", "use_odometry",
-                           "map_update_distance_m", "map_update_angle_rad", "reflectivity_weight",
-                           "self_calibration", "loop_closure"},
-                    "slam2d");
-  if (!node) return;
-  if (const YAML::Node files = node["calibrations"]) {
+void readSlam2d(Section& s, Slam2dConfig& slam2d) {
+  if (const YAML::Node files = s.child("calibrations")) {
     for (const auto& [model, file] : files.as<std::map<std::string, std::string>>()) {
       slam2d.calibration_files[model] = file;
     }
   }
   slam2d::Slam2dOptions& o = slam2d.options;
-  read(node, "resolution_m", o.resolution_m);
-  read(node, "range_min_m", o.range_min_m);
-  read(node, "range_max_m", o.range_max_m);
-  read(node, "use_odometry", o.use_odometry);
-  read(node, "map_update_distance_m", o.map_update_distance_m);
-  read(node, "map_update_angle_rad", o.map_update_angle_rad);
-  read(node, "reflectivity_weight", o.reflectivity_weight);
-  read(node, "self_calibration", o.self_calibration);
-  readSlam2dLoopClosure(node["loop_closure"], o.loop_closure);
+  s.read("resolution_m", o.resolution_m);
+  s.read("range_min_m", o.range_min_m);
+  s.read("range_max_m", o.range_max_m);
+  s.read("use_odometry", o.use_odometry);
+  s.read("map_update_distance_m", o.map_update_distance_m);
+  s.read("map_update_angle_rad", o.map_update_angle_rad);
+  s.read("reflectivity_weight", o.reflectivity_weight);
+  s.read("self_calibration", o.self_calibration);
+  s.section("loop_closure", [&](Section& loop) { readSlam2dLoopClosure(loop, o.loop_closure); });
 }
 
 }  // namespace
@@ -148,33 +176,28 @@ size_t batchRequestBytes(size_t points) {
 
 void loadConfigFile(const std::filesystem::path& file, Config& config) {
   try {
-    const YAML::Node root = YAML::LoadFile(file.string());
-    if (root.IsNull()) return;  // an empty file
-    rejectUnknownKeys(root, {"listen", "data_dir", "web_root", "io_threads", "snapshot_interval_s", "viewer_tick_ms",
-                             "log_level", "auth", "tls", "limits", "maps", "loop_closure", "slam2d"},
-                      "");
-    if (const YAML::Node listen = root["listen"]) setListenAddress(listen.as<std::string>(), config);
-    if (const YAML::Node dir = root["data_dir"]) config.data_dir = dir.as<std::string>();
-    if (const YAML::Node dir = root["web_root"]) config.web_root = dir.as<std::string>();
-    read(root, "io_threads", config.io_threads);
-    read(root, "snapshot_interval_s", config.snapshot_interval_s);
-    read(root, "viewer_tick_ms", config.viewer_tick_ms);
-    read(root, "log_level", config.log_level);
-    readAuth(root["auth"], config.auth);
-    if (const YAML::Node tls = root["tls"]) {
-      rejectUnknownKeys(tls, {"certificate_file", "private_key_file"}, "tls");
-      if (const YAML::Node file = tls["certificate_file"]) config.tls.certificate_file = file.as<std::string>();
-      if (const YAML::Node file = tls["private_key_file"]) config.tls.private_key_file = file.as<std::string>();
-    }
-    readLimits(root["limits"], config.limits);
-    readMaps(root["maps"], config.maps);
-    if (const YAML::Node loop = root["loop_closure"]) {
-      rejectUnknownKeys(loop, {"camera", "cloud_intensity", "reflectivity_patches"}, "loop_closure");
-      read(loop, "camera", config.loop_closure.camera);
-      read(loop, "cloud_intensity", config.loop_closure.cloud_intensity);
-      read(loop, "reflectivity_patches", config.loop_closure.reflectivity_patches);
-    }
-    readSlam2d(root["slam2d"], config.slam2d);
+    readSection(YAML::LoadFile(file.string()), "", [&](Section& root) {
+      if (const YAML::Node listen = root.child("listen")) setListenAddress(listen.as<std::string>(), config);
+      root.read("data_dir", config.data_dir);
+      root.read("web_root", config.web_root);
+      root.read("io_threads", config.io_threads);
+      root.read("snapshot_interval_s", config.snapshot_interval_s);
+      root.read("viewer_tick_ms", config.viewer_tick_ms);
+      root.read("log_level", config.log_level);
+      root.section("auth", [&](Section& s) { readAuth(s, config.auth); });
+      root.section("tls", [&](Section& s) {
+        s.read("certificate_file", config.tls.certificate_file);
+        s.read("private_key_file", config.tls.private_key_file);
+      });
+      root.section("limits", [&](Section& s) { readLimits(s, config.limits); });
+      root.section("maps", [&](Section& s) { readMaps(s, config.maps); });
+      root.section("loop_closure", [&](Section& s) {
+        s.read("camera", config.loop_closure.camera);
+        s.read("cloud_intensity", config.loop_closure.cloud_intensity);
+        s.read("reflectivity_patches", config.loop_closure.reflectivity_patches);
+      });
+      root.section("slam2d", [&](Section& s) { readSlam2d(s, config.slam2d); });
+    });
   } catch (const std::exception& e) {
     throw std::runtime_error("config " + file.string() + ": " + e.what());
   }

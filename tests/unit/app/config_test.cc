@@ -129,7 +129,10 @@ TEST(LoadConfigFile, BadTypesThrowNamingTheFile) {
   EXPECT_NE(loadError("limits:\n  max_memory_bytes: -1\n"), "");
   EXPECT_NE(loadError("limits:\n  max_memory_bytes: 2GiB\n"), "");
   EXPECT_NE(loadError("maps:\n  resolution_m: [1, 2]\n"), "");
-  EXPECT_NE(loadError("auth:\n  tokens:\n    - {role: admin}\n"), "");
+  EXPECT_NE(loadError("auth:\n  tokens:\n    - {role: admin}\n").find("auth.tokens[].token is required"),
+            std::string::npos);
+  EXPECT_NE(loadError("auth:\n  tokens:\n    - {token: some-secret}\n").find("auth.tokens[].role is required"),
+            std::string::npos);
 }
 
 TEST(LoadConfigFile, BadListenAddressThrowsNamingTheFile) {
@@ -420,6 +423,9 @@ TEST(LoadConfigFile, UnknownKeysAreRefusedWithTheirPath) {
   EXPECT_NE(loadError("slam2d:\n  loop_closure:\n    min_scor: 0.7\n").find("'slam2d.loop_closure.min_scor'"),
             std::string::npos);
   EXPECT_NE(loadError("slam2d: 3\n").find("slam2d must be a mapping"), std::string::npos);
+  EXPECT_NE(loadError("slam2d:\n  loop_closure: [1]\n").find("slam2d.loop_closure must be a mapping"),
+            std::string::npos);
+  EXPECT_NE(loadError("- 1\n").find("the file must be a mapping"), std::string::npos);
   EXPECT_EQ(loadError(""), "") << "an empty file sets nothing";
   EXPECT_EQ(loadError("limits:\n"), "") << "an empty section sets nothing";
 }
