@@ -253,8 +253,9 @@ json repeatedRuns(const Slam2dBenchOptions& options, const Slam2dDataset& data, 
       const json judged = judgeClosures(closures.reported, closures.withdrawn, judgedRun(inputs, run.laser_poses), judges);
       for (const char* key : {"closures", "false_closures", "false_against_submap"}) one[key] = judged[key];
     }
-    std::printf("run %d of %d, started at (%.3f m, %.3f m, %.1f°): ATE %.4f m", k + 1, options.repeat, start.x_m,
-                start.y_m, start.theta_rad * kDegPerRad, one["ate_m"].get<double>());
+    // Printed in full: a start rounded to a few digits is another run (these runs are chaotic).
+    std::printf("run %d of %d (--start %.17g %.17g %.17g): ATE %.4f m", k + 1, options.repeat, start.x_m, start.y_m,
+                start.theta_rad, one["ate_m"].get<double>());
     if (one.contains("closures")) {
       if (one["false_closures"].is_null())
         std::printf(", %zu closures (not judged)", one["closures"].get<size_t>());
