@@ -14,16 +14,21 @@ namespace rmap::bench {
 using json = nlohmann::json;
 using slam2d::Pose2;
 
-std::optional<Pose2> ClosureJudge::referenceOf(std::optional<size_t> input, const std::vector<Pose2>& laser_poses) const {
+std::optional<size_t> ClosureJudge::sourceOf(std::optional<size_t> input, size_t scans) const {
   if (!input) return std::nullopt;
   const size_t i = *input;
   for (size_t d = 0; d <= kMaxBorrow; ++d) {
     for (const size_t j : {i - d, i + d}) {
-      if (j >= reference.size() || j >= laser_poses.size() || !reference[j]) continue;  // i − d wraps to a huge index
-      return *reference[j] * between(laser_poses[j], laser_poses[i]);
+      if (j < reference.size() && j < scans && reference[j]) return j;  // i − d wraps to a huge index
     }
   }
   return std::nullopt;
+}
+
+std::optional<Pose2> ClosureJudge::referenceOf(std::optional<size_t> input, const std::vector<Pose2>& laser_poses) const {
+  const std::optional<size_t> j = sourceOf(input, laser_poses.size());
+  if (!j || (*j < contradicted.size() && contradicted[*j])) return std::nullopt;
+  return *reference[*j] * between(laser_poses[*j], laser_poses[*input]);
 }
 
 std::unordered_map<int64_t, size_t> uniqueStampIndex(const std::vector<int64_t>& stamps_ns) {
@@ -35,6 +40,35 @@ std::unordered_map<int64_t, size_t> uniqueStampIndex(const std::vector<int64_t>&
   }
   std::erase_if(index, [](const auto& entry) { return entry.second == kShared; });
   return index;
+}
+
+size_t markContradictedPoses(ClosureJudge& judge, const std::vector<datasets::SlamRelation>& relations,
+                             const JudgedRun& run) {
+  const std::unordered_map<int64_t, size_t> index_of_stamp = uniqueStampIndex(run.stamps_ns);
+  const auto inputOf = [&](int64_t stamp) -> std::optional<size_t> {
+    const auto it = index_of_stamp.find(stamp);
+    return it == index_of_stamp.end() ? std::nullopt : std::optional<size_t>(it->second);
+  };
+  // Every relation is judged against the poses as given, then the marks are set together.
+  std::vector<size_t> contradicted;
+  for (const datasets::SlamRelation& r : relations) {
+    const std::optional<size_t> a = inputOf(r.from_stamp_ns), b = inputOf(r.to_stamp_ns);
+    const std::optional<Pose2> ra = judge.referenceOf(a, run.laser_poses), rb = judge.referenceOf(b, run.laser_poses);
+    if (!ra || !rb) continue;
+    const Pose2 e = between(r.motion, between(*ra, *rb));
+    if (e.translation().norm() <= ClosureJudge::kMaxRelationError_m &&
+        std::abs(e.theta_rad) <= ClosureJudge::kMaxRelationError_rad)
+      continue;
+    contradicted.push_back(*judge.sourceOf(a, run.laser_poses.size()));
+    contradicted.push_back(*judge.sourceOf(b, run.laser_poses.size()));
+  }
+  judge.contradicted.resize(judge.reference.size(), false);
+  size_t marked = 0;
+  for (const size_t j : contradicted) {
+    marked += !judge.contradicted[j];
+    judge.contradicted[j] = true;
+  }
+  return marked;
 }
 
 namespace {
@@ -93,7 +127,9 @@ std::optional<Pose2> submapAnchor(const slam2d::LoopClosure2d& c, std::optional<
 
 json judgeClosures(const std::vector<slam2d::LoopClosure2d>& closures,
                    const std::vector<slam2d::LoopClosure2d>& withdrawn, const JudgedRun& run,
-                   const std::vector<ClosureJudge>& judges) {
+                   std::vector<ClosureJudge> judges, const std::vector<datasets::SlamRelation>& relations) {
+  std::vector<size_t> contradicted;
+  for (ClosureJudge& judge : judges) contradicted.push_back(markContradictedPoses(judge, relations, run));
   // Stamps alone do not name a closure where scans share stamps; the measurement is the same
   // copy in both lists (poses differ: a withdrawn closure carries the poses of its withdrawal).
   const auto key = [](const slam2d::LoopClosure2d& c) {
@@ -173,7 +209,8 @@ json judgeClosures(const std::vector<slam2d::LoopClosure2d>& closures,
                          {"false_closures_withdrawn", wrong_withdrawn[j]},
                          {"closures_judged_against_submap", judged_submap[j]},
                          {"false_against_submap", wrong_submap[j]},
-                         {"worst_closure_error_m", judged[j] > 0 ? json(worst_m[j]) : json(nullptr)}});
+                         {"worst_closure_error_m", judged[j] > 0 ? json(worst_m[j]) : json(nullptr)},
+                         {"judge_poses_contradicted", contradicted[j]}});
   const bool first = !judges.empty() && judged.front() > 0;
   const bool several = judges.size() > 1;
   return {{"closures", closures.size()},
@@ -185,6 +222,7 @@ json judgeClosures(const std::vector<slam2d::LoopClosure2d>& closures,
           {"worst_closure_error_m", first ? json(worst_m.front()) : json(nullptr)},
           {"false_against_submap", first ? json(wrong_submap.front()) : json(nullptr)},
           {"judged_by", judges.empty() ? json(nullptr) : json(judges.front().judged_by)},
+          {"judge_poses_contradicted", judges.empty() ? json(nullptr) : json(contradicted.front())},
           {"judges", per_judge},
           {"closures_judged_by_all", several ? json(judged_by_all) : json(nullptr)},
           {"false_by_all_judges", several ? json(wrong_by_all) : json(nullptr)},

@@ -8,6 +8,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include "datasets/slam_relations.h"
 #include "slam2d/loop_closure.h"
 #include "slam2d/pose2.h"
 
@@ -18,6 +19,8 @@ namespace rmap::bench {
 struct ClosureJudge {
   std::string judged_by;                                ///< where the poses come from, for the report
   std::vector<std::optional<slam2d::Pose2>> reference;  ///< per input scan; none where the reference lacks the scan
+  /// Per input scan: its reference pose is contradicted (markContradictedPoses) and judges nothing.
+  std::vector<bool> contradicted;
 
   /// A closure is false when its relative pose is off by more than this.
   static constexpr double kMaxError_m = 0.3;
@@ -27,10 +30,18 @@ struct ClosureJudge {
   /// two (a few scans: centimetres).
   static constexpr size_t kMaxBorrow = 30;
 
+  /// A relation (a checked motion between two scans) that the judge's poses
+  /// of its two scans miss by more than this contradicts them.
+  static constexpr double kMaxRelationError_m = 0.15;
+  static constexpr double kMaxRelationError_rad = 3.0 * std::numbers::pi / 180.0;
+
+  /// None when the pose it would borrow is contradicted.
   /// @param input  index of the scan, none for a scan that cannot be named
   /// @param laser_poses  the estimated laser pose of every input scan
   std::optional<slam2d::Pose2> referenceOf(std::optional<size_t> input,
                                            const std::vector<slam2d::Pose2>& laser_poses) const;
+  /// The scan whose reference pose referenceOf(input) borrows (input itself when it has one).
+  std::optional<size_t> sourceOf(std::optional<size_t> input, size_t scans) const;
 };
 
 /// Index of each stamp among `stamps_ns`, without the stamps several scans
@@ -43,6 +54,18 @@ struct JudgedRun {
   std::vector<slam2d::Pose2> sensor_mounts;  ///< per input scan, robot → laser
   std::vector<slam2d::Pose2> laser_poses;    ///< per input scan, the final estimate
 };
+
+/// Marks the judge's poses that `relations` contradict (the poses referenceOf
+/// borrows for both scans of a relation they miss by more than
+/// kMaxRelationError_*): a corrected log can be off the relations at a scan
+/// (raw intel in a fast turn, 2–4.5°: BENCHMARKS.md §4), and a closure judged
+/// against that pose would be called false for the judge's error. A scan
+/// whose pose would come from a marked one is not judged: borrowing from
+/// farther through the estimate would put the estimate's error into the
+/// verdict (1 m per scan on the corrected logs).
+/// @return the number of poses marked
+size_t markContradictedPoses(ClosureJudge& judge, const std::vector<datasets::SlamRelation>& relations,
+                             const JudgedRun& run);
 
 /// Judges every closure against every judge: the error of its measured
 /// laser-to-laser relative pose against each judge's poses of its two scans,
@@ -66,10 +89,14 @@ struct JudgedRun {
 ///         more, else null); list (each closure with `withdrawn`, the first
 ///         judge's errors — submap_error_m, submap_error_deg and
 ///         false_against_submap where the submap had 3 keyframes with a
-///         judge's pose — and, with two judges or more, by_judge)
+///         judge's pose — and, with two judges or more, by_judge);
+///         with `relations`, each judge judges without the poses they
+///         contradict (markContradictedPoses): judge_poses_contradicted, the
+///         first judge's, and each judge's in judges
 nlohmann::json judgeClosures(const std::vector<slam2d::LoopClosure2d>& closures,
                              const std::vector<slam2d::LoopClosure2d>& withdrawn, const JudgedRun& run,
-                             const std::vector<ClosureJudge>& judges);
+                             std::vector<ClosureJudge> judges,
+                             const std::vector<datasets::SlamRelation>& relations = {});
 
 /// Where two judges disagree: over the scans both hold a pose of (none
 /// borrowed), `other` is brought onto `first` by one planar rigid motion

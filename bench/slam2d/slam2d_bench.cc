@@ -196,7 +196,7 @@ std::vector<ClosureJudge> closureJudges(const Slam2dBenchOptions& options, const
     ref_source.odometry = OdometrySource::kNone;
     const Slam2dDataset ref = loadSlam2dDataset(path, ref_source);
     ClosureJudge judge{"poses of " + path + " (" + std::to_string(ref.stamps_replaced) + " scans found)",
-                       std::vector<std::optional<Pose2>>(data.inputs.size())};
+                       std::vector<std::optional<Pose2>>(data.inputs.size()), {}};
     for (size_t k = 0; k < ref.inputs.size(); ++k) {
       const auto it = input_of_stamp.find(ref.inputs[k].scan.stamp_ns);
       if (it != input_of_stamp.end() && ref.reference[k]) judge.reference[it->second] = ref.reference[k];
@@ -204,7 +204,7 @@ std::vector<ClosureJudge> closureJudges(const Slam2dBenchOptions& options, const
     judges.push_back(std::move(judge));
   }
   if (judges.empty() && data.reference_kind.find("raw odometry") == std::string::npos)
-    judges.push_back({data.reference_kind, data.reference});
+    judges.push_back({data.reference_kind, data.reference, {}});
   return judges;
 }
 
@@ -228,9 +228,12 @@ std::vector<Slam2dInput> startedAt(const std::vector<Slam2dInput>& inputs, const
   return out;
 }
 
+/// The closure counts each run of --repeat reports (keys of judgeClosures' JSON).
+constexpr const char* kRunClosureKeys[] = {"closures", "closures_judged", "false_closures", "false_against_submap"};
+
 /// Runs 2..n of --repeat: the run from n − 1 other starts (seeded, so reproducible), each
 /// scored as the headline run is. @return JSON: runs [{start, ate_m, rpe_1m_m, rel_trans_err_m,
-/// closures, false_closures, false_against_submap, cpu_s}] (the first is `first_run`) and the
+/// closures, closures_judged, false_closures, false_against_submap, cpu_s}] (the first is `first_run`) and the
 /// median, min and max of ATE over all n runs
 json repeatedRuns(const Slam2dBenchOptions& options, const Slam2dDataset& data, const std::vector<ClosureJudge>& judges,
                   const json& first_run) {
@@ -250,8 +253,9 @@ json repeatedRuns(const Slam2dBenchOptions& options, const Slam2dDataset& data, 
                 {"rel_trans_err_m", relationErrors(stamped(inputs, run.laser_poses), data.relations).translation_m.mean},
                 {"cpu_s", run.cpu_s}};
     if (slam.loopClosureStats()) {
-      const json judged = judgeClosures(closures.reported, closures.withdrawn, judgedRun(inputs, run.laser_poses), judges);
-      for (const char* key : {"closures", "false_closures", "false_against_submap"}) one[key] = judged[key];
+      const json judged = judgeClosures(closures.reported, closures.withdrawn, judgedRun(inputs, run.laser_poses), judges,
+                                        data.relations);
+      for (const char* key : kRunClosureKeys) one[key] = judged[key];
     }
     // Printed in full: a start rounded to a few digits is another run (these runs are chaotic).
     std::printf("run %d of %d (--start %.17g %.17g %.17g): ATE %.4f m", k + 1, options.repeat, start.x_m, start.y_m,
@@ -260,7 +264,8 @@ json repeatedRuns(const Slam2dBenchOptions& options, const Slam2dDataset& data, 
       if (one["false_closures"].is_null())
         std::printf(", %zu closures (not judged)", one["closures"].get<size_t>());
       else
-        std::printf(", %zu closures (%zu false, %zu against the whole submap)", one["closures"].get<size_t>(),
+        std::printf(", %zu closures (%zu judged: %zu false, %zu against the whole submap)",
+                    one["closures"].get<size_t>(), one["closures_judged"].get<size_t>(),
                     one["false_closures"].get<size_t>(), one["false_against_submap"].get<size_t>());
     }
     std::printf(", %.1f s CPU\n", run.cpu_s);
@@ -368,7 +373,7 @@ int runSlam2dBench(const Slam2dBenchOptions& options) {
       slam.loopClosureStats() ? closureJudges(options, data) : std::vector<ClosureJudge>{};
   if (const slam2d::LoopClosureStats* lc = slam.loopClosureStats()) {
     const JudgedRun judged_run = judgedRun(data.inputs, run.laser_poses);
-    json lc_json = judgeClosures(closures, run_closures.withdrawn, judged_run, judges);
+    json lc_json = judgeClosures(closures, run_closures.withdrawn, judged_run, judges, data.relations);
     if (judges.empty()) lc_json["judged_by"] = "none (raw odometry is no reference)";
     lc_json.update({{"keyframes", slam.keyframeCount()},
                     {"searches", lc->searches},
@@ -390,13 +395,19 @@ int runSlam2dBench(const Slam2dBenchOptions& options) {
                 closures.size(), lc_json["withdrawn"].get<size_t>(), confirmed_at_end.size(),
                 static_cast<unsigned long long>(lc->unconfirmed), static_cast<unsigned long long>(lc->searches),
                 static_cast<unsigned long long>(lc->optimizations), lc->optimization_s, lc->search_s);
-    for (const json& j : lc_json["judges"])
-      std::printf("  %zu judged by %s: %zu false (%zu of them withdrawn later), worst %.3f m; against the whole "
+    for (const json& j : lc_json["judges"]) {
+      const std::string vetted =
+          data.relations.empty() ? ""
+                                 : " (" + std::to_string(j["judge_poses_contradicted"].get<size_t>()) +
+                                       " of its poses contradict the relations: what they would judge is not)";
+      std::printf("  %zu judged by %s%s: %zu false (%zu of them withdrawn later), worst %.3f m; against the whole "
                   "submap %zu false of %zu\n",
-                  j["closures_judged"].get<size_t>(), j["judged_by"].get<std::string>().c_str(),
-                  j["false_closures"].get<size_t>(), j["false_closures_withdrawn"].get<size_t>(),
+                  j["closures_judged"].get<size_t>(), j["judged_by"].get<std::string>().c_str(), vetted.c_str(),
+                  j["false_closures"].get<size_t>(),
+                  j["false_closures_withdrawn"].get<size_t>(),
                   j["worst_closure_error_m"].is_null() ? 0.0 : j["worst_closure_error_m"].get<double>(),
                   j["false_against_submap"].get<size_t>(), j["closures_judged_against_submap"].get<size_t>());
+    }
     if (judges.size() > 1) {
       std::printf("  false by every judge: %zu of the %zu closures all judged\n",
                   lc_json["false_by_all_judges"].get<size_t>(), lc_json["closures_judged_by_all"].get<size_t>());
@@ -486,7 +497,7 @@ int runSlam2dBench(const Slam2dBenchOptions& options) {
     json first = {{"start", {start.x_m, start.y_m, start.theta_rad}}, {"ate_m", ate.rmse}, {"rpe_1m_m", rpe.translation_m.rmse},
                   {"rel_trans_err_m", rel.translation_m.mean}, {"cpu_s", run.cpu_s}};
     if (r.contains("loop_closure")) {
-      for (const char* key : {"closures", "false_closures", "false_against_submap"}) first[key] = r["loop_closure"][key];
+      for (const char* key : kRunClosureKeys) first[key] = r["loop_closure"][key];
     }
     r["repeated"] = repeatedRuns(options, data, judges, first);
   }

@@ -43,7 +43,7 @@ struct TenScanRun {
     return c;
   }
   ClosureJudge truthJudge(const std::string& name) const {
-    return {name, std::vector<std::optional<Pose2>>(judged.laser_poses.begin(), judged.laser_poses.end())};
+    return {name, std::vector<std::optional<Pose2>>(judged.laser_poses.begin(), judged.laser_poses.end()), {}};
   }
 };
 
@@ -168,6 +168,48 @@ TEST(ClosureJudge, AScanWithoutAReferenceBorrowsItsNearestNeighboursThroughTheEs
   EXPECT_EQ(r["closures_judged"], 0);
   EXPECT_TRUE(r["false_closures"].is_null());
   EXPECT_FALSE(r["list"][0].contains("error_m"));
+}
+
+// A corrected log can be off the checked relations at a scan: what it would
+// judge there is not judged, rather than called false for the judge's error.
+TEST(ClosureJudge, APoseTheRelationsContradictJudgesNothing) {
+  const TenScanRun run;
+  ClosureJudge bent = run.truthJudge("bent");
+  *bent.reference[2] = *bent.reference[2] * Pose2{0.0, 0.0, 7.0 * kDeg};
+  const auto relation = [&](size_t from, size_t to) {
+    return datasets::SlamRelation{run.judged.stamps_ns[from], run.judged.stamps_ns[to],
+                                  between(run.judged.laser_poses[from], run.judged.laser_poses[to]), 0};
+  };
+  const std::vector<slam2d::LoopClosure2d> closures = {run.closure(8, 2), run.closure(9, 5)};
+  nlohmann::json r = judgeClosures(closures, {}, run.judged, {bent});
+  EXPECT_EQ(r["false_closures"], 1) << "without relations the bent pose makes a right closure false";
+  EXPECT_EQ(r["judge_poses_contradicted"], 0);
+
+  // Relations 1→2 and 2→3 miss the bent pose by 7°; each condemns both its poses. 5→6 holds.
+  r = judgeClosures(closures, {}, run.judged, {bent}, {relation(1, 2), relation(2, 3), relation(5, 6)});
+  EXPECT_EQ(r["judge_poses_contradicted"], 3);
+  EXPECT_EQ(r["judges"][0]["judge_poses_contradicted"], 3);
+  EXPECT_EQ(r["closures_judged"], 1);
+  EXPECT_EQ(r["false_closures"], 0);
+  EXPECT_FALSE(r["list"][0].contains("error_m"));
+  EXPECT_NEAR(r["list"][1]["error_m"].get<double>(), 0.0, 1e-9);
+
+  // Within the bounds (0.15 m, 3°) a relation condemns nothing.
+  ClosureJudge slightly = run.truthJudge("slightly");
+  *slightly.reference[2] = *slightly.reference[2] * Pose2{0.1, 0.0, 2.5 * kDeg};
+  r = judgeClosures(closures, {}, run.judged, {slightly}, {relation(1, 2)});
+  EXPECT_EQ(r["judge_poses_contradicted"], 0);
+  EXPECT_EQ(r["closures_judged"], 2);
+
+  // A scan without a pose of its own borrows none from a condemned one.
+  ClosureJudge sparse = run.truthJudge("sparse");
+  sparse.reference[3].reset();
+  *sparse.reference[2] = *sparse.reference[2] * Pose2{0.0, 0.0, 7.0 * kDeg};
+  ClosureJudge marked = sparse;
+  EXPECT_EQ(markContradictedPoses(marked, {relation(1, 2)}, run.judged), 2u);
+  EXPECT_TRUE(sparse.referenceOf(3, run.judged.laser_poses).has_value());
+  EXPECT_FALSE(marked.referenceOf(3, run.judged.laser_poses).has_value()) << "scan 3 borrows scan 2's pose";
+  EXPECT_TRUE(marked.referenceOf(4, run.judged.laser_poses).has_value());
 }
 
 TEST(ClosureJudge, ScansSharingAStampAreNotJudged) {
