@@ -83,8 +83,18 @@ for log in "$data"/carmen-2d/*.log*; do
     relations=$data/relations/${raw%%.*}.relations
     [ -f "$relations" ] && args+=(--relations "$relations")
   fi
+  # Where the raw log has two corrections, both judge the closures, the log's own first.
+  judge=()
+  others=()
+  [ -n "$raw" ] && others=(${corrected_of[${raw%%.*}]:-})
+  if [ ${#others[@]} -gt 1 ]; then
+    judge=(--closure-reference "$log")
+    for c in "${others[@]}"; do
+      [ "$c" != "$(basename "$log")" ] && [ -f "$data/carmen-2d/$c" ] && judge+=(--closure-reference "$data/carmen-2d/$c")
+    done
+  fi
   run "corrected-${name/-corrected/}" "${args[@]}"
-  run_lc "corrected-${name/-corrected/}" "${args[@]}" "${repeat[@]}"
+  run_lc "corrected-${name/-corrected/}" "${args[@]}" "${judge[@]}" "${repeat[@]}"
 done
 # Raw logs scored against a corrected log of a subset of their scans (same stamps; data README).
 for pair in "mit-csail.clf.gz:csail-corrected-subset.robotlaser1.log.gz"; do

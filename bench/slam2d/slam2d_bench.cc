@@ -184,7 +184,8 @@ JudgedRun judgedRun(const std::vector<Slam2dInput>& inputs, const std::vector<Po
   return run;
 }
 
-/// Judges: each corrected log of the same run (scans found by their ranges), else the reference poses.
+}  // namespace
+
 std::vector<ClosureJudge> closureJudges(const Slam2dBenchOptions& options, const Slam2dDataset& data) {
   std::vector<ClosureJudge> judges;
   std::vector<int64_t> stamps_ns;
@@ -192,7 +193,8 @@ std::vector<ClosureJudge> closureJudges(const Slam2dBenchOptions& options, const
   const std::unordered_map<int64_t, size_t> input_of_stamp = uniqueStampIndex(stamps_ns);
   for (const std::string& path : options.closure_reference_paths) {
     Slam2dSourceOptions ref_source;
-    ref_source.stamps_path = options.source;
+    // Found by ranges in the log whose stamps the run's scans carry (--stamps-from's, when given).
+    ref_source.stamps_path = options.stamps_path.empty() ? options.source : options.stamps_path;
     ref_source.odometry = OdometrySource::kNone;
     const Slam2dDataset ref = loadSlam2dDataset(path, ref_source);
     ClosureJudge judge{"poses of " + path + " (" + std::to_string(ref.stamps_replaced) + " scans found)",
@@ -207,6 +209,8 @@ std::vector<ClosureJudge> closureJudges(const Slam2dBenchOptions& options, const
     judges.push_back({data.reference_kind, data.reference, {}});
   return judges;
 }
+
+namespace {
 
 /// The same run started elsewhere: every odometry pose moved by the rigid motion `start` (the
 /// odometry's steps are unchanged), or, in a run without odometry, the first scan placed at
@@ -229,12 +233,13 @@ std::vector<Slam2dInput> startedAt(const std::vector<Slam2dInput>& inputs, const
 }
 
 /// The closure counts each run of --repeat reports (keys of judgeClosures' JSON).
-constexpr const char* kRunClosureKeys[] = {"closures", "closures_judged", "false_closures", "false_against_submap"};
+constexpr const char* kRunClosureKeys[] = {"closures", "closures_judged", "false_closures", "false_against_submap",
+                                           "false_by_all_judges"};
 
 /// Runs 2..n of --repeat: the run from n − 1 other starts (seeded, so reproducible), each
 /// scored as the headline run is. @return JSON: runs [{start, ate_m, rpe_1m_m, rel_trans_err_m,
-/// closures, closures_judged, false_closures, false_against_submap, cpu_s}] (the first is `first_run`) and the
-/// median, min and max of ATE over all n runs
+/// closures, closures_judged, false_closures, false_against_submap, false_by_all_judges, cpu_s}] (the first
+/// is `first_run`) and the median, min and max of ATE over all n runs
 json repeatedRuns(const Slam2dBenchOptions& options, const Slam2dDataset& data, const std::vector<ClosureJudge>& judges,
                   const json& first_run) {
   json runs = json::array({first_run});
@@ -264,9 +269,12 @@ json repeatedRuns(const Slam2dBenchOptions& options, const Slam2dDataset& data, 
       if (one["false_closures"].is_null())
         std::printf(", %zu closures (not judged)", one["closures"].get<size_t>());
       else
-        std::printf(", %zu closures (%zu judged: %zu false, %zu against the whole submap)",
+        std::printf(", %zu closures (%zu judged: %zu false, %zu against the whole submap%s)",
                     one["closures"].get<size_t>(), one["closures_judged"].get<size_t>(),
-                    one["false_closures"].get<size_t>(), one["false_against_submap"].get<size_t>());
+                    one["false_closures"].get<size_t>(), one["false_against_submap"].get<size_t>(),
+                    one["false_by_all_judges"].is_null()
+                        ? ""
+                        : (", " + std::to_string(one["false_by_all_judges"].get<size_t>()) + " by every judge").c_str());
     }
     std::printf(", %.1f s CPU\n", run.cpu_s);
     runs.push_back(std::move(one));

@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "slam2d/closure_judge.h"
 #include "slam2d/slam2d.h"
 #include "slam2d/slam2d_dataset.h"
 
@@ -42,6 +43,12 @@ struct Slam2dBenchOptions {
   Slam2dSimOptions sim;
   slam2d::Slam2dOptions slam;  ///< the engine's defaults unless set on the command line
 };
+
+/// The closure judges of a run of `data`: each of closure_reference_paths
+/// (its scans found by their ranges in the log whose stamps the run's scans
+/// carry: stamps_path when given, else source), else the reference poses
+/// (none for raw odometry).
+std::vector<ClosureJudge> closureJudges(const Slam2dBenchOptions& options, const Slam2dDataset& data);
 
 /// Runs, prints a summary, writes JSON. @return process exit code
 int runSlam2dBench(const Slam2dBenchOptions& options);

@@ -176,6 +176,38 @@ TEST(Slam2dBench, StampsFromTheLogHoldingTheSameScans) {
   fs::remove(raw);
 }
 
+// A corrected log run with --stamps-from carries the raw log's stamps: a
+// second correction judging its closures must find its scans there too.
+TEST(Slam2dBench, ClosureJudgesFindTheirScansWhereTheRunsStampsCameFrom) {
+  const fs::path run_log = tempPath("run.log"), raw = tempPath("raw.log"), judge_log = tempPath("judge.log");
+  std::ofstream(raw) << "FLASER 3 1 2 3 0 0 0 0 0 0 976052857.1 h 0\n"
+                        "FLASER 3 2 3 4 0 0 0 0 0 0 976052857.2 h 0\n"
+                        "FLASER 3 3 4 5 0 0 0 0 0 0 976052857.3 h 0\n";
+  std::ofstream(run_log) << "FLASER 3 1 2 3 0 0 0 0 0 0 0.5 h 0\nFLASER 3 2 3 4 1 0 0 1 0 0 0.6 h 0\n"
+                            "FLASER 3 3 4 5 2 0 0 2 0 0 0.7 h 0\n";
+  std::ofstream(judge_log) << "FLASER 3 2 3 4 7 8 0.5 7 8 0.5 5.0 h 0\nFLASER 3 3 4 5 9 8 0.5 9 8 0.5 6.0 h 0\n";
+  for (const bool stamps_from_raw : {true, false}) {
+    Slam2dBenchOptions options;
+    options.source = run_log.string();
+    if (stamps_from_raw) options.stamps_path = raw.string();
+    options.closure_reference_paths = {judge_log.string()};
+    Slam2dSourceOptions source;
+    source.stamps_path = options.stamps_path;
+    const Slam2dDataset data = loadSlam2dDataset(run_log.string(), source);
+    EXPECT_EQ(data.inputs[1].scan.stamp_ns, stamps_from_raw ? 976052857200000000 : 600000000);
+    const std::vector<ClosureJudge> judges = closureJudges(options, data);
+    ASSERT_EQ(judges.size(), 1u);
+    ASSERT_EQ(judges[0].reference.size(), 3u);
+    EXPECT_FALSE(judges[0].reference[0]) << stamps_from_raw;
+    ASSERT_TRUE(judges[0].reference[1] && judges[0].reference[2]) << stamps_from_raw;
+    EXPECT_EQ(judges[0].reference[1]->x_m, 7.0);
+    EXPECT_EQ(judges[0].reference[2]->x_m, 9.0);
+  }
+  fs::remove(run_log);
+  fs::remove(raw);
+  fs::remove(judge_log);
+}
+
 TEST(Slam2dBench, BadSourcesAreClearErrors) {
   EXPECT_THROW(loadSlam2dDataset("sim:nowhere", {}), std::runtime_error);
   EXPECT_THROW(loadSlam2dDataset("/nonexistent/log.gz", {}), std::runtime_error);
