@@ -48,20 +48,39 @@ class Section {
     read_.insert(key);
     return node_[key];
   }
+  /// The list at `key` (absent or empty: an empty list).
+  /// @throws std::invalid_argument when it is not a list
+  YAML::Node list(const char* key) {
+    const YAML::Node child_node = child(key);
+    if (!child_node || child_node.IsNull()) return YAML::Node(YAML::NodeType::Sequence);
+    if (!child_node.IsSequence()) throw std::invalid_argument(pathOf(key) + " must be a list");
+    return child_node;
+  }
+  /// The value of `key` as a T.
+  /// @throws std::invalid_argument naming the key and its place in the file when it is not one
+  template <typename T>
+  T as(const char* key, const YAML::Node& value) const {
+    try {
+      return value.as<T>();
+    } catch (const YAML::BadConversion& e) {
+      throw std::invalid_argument(pathOf(key) + ": a value of the wrong kind (line " + std::to_string(e.mark.line + 1) +
+                                  ", column " + std::to_string(e.mark.column + 1) + ")");
+    }
+  }
   /// Sets `value` when the key is present, else leaves it.
   template <typename T>
   void read(const char* key, T& value) {
-    if (const YAML::Node child_node = child(key)) value = child_node.as<T>();
+    if (const YAML::Node child_node = child(key)) value = as<T>(key, child_node);
   }
   void read(const char* key, std::filesystem::path& value) {
-    if (const YAML::Node child_node = child(key)) value = child_node.as<std::string>();
+    if (const YAML::Node child_node = child(key)) value = as<std::string>(key, child_node);
   }
   /// @throws std::invalid_argument when the key is absent
   template <typename T>
   T required(const char* key) {
     const YAML::Node child_node = child(key);
     if (!child_node) throw std::invalid_argument(pathOf(key) + " is required");
-    return child_node.as<T>();
+    return as<T>(key, child_node);
   }
   /// Reads the mapping at `key` with `fill(Section&)`, then refuses the keys it did not read.
   template <typename Fill>
@@ -96,9 +115,10 @@ void Section::section(const char* key, Fill&& fill) {
 }
 
 void readAuth(Section& auth_section, AuthConfig& auth) {
-  if (const YAML::Node tokens = auth_section.child("tokens")) {
+  // A key that is there replaces the default, even empty ("tokens:": no token).
+  if (auth_section.child("tokens")) {
     auth.tokens.clear();
-    for (const YAML::Node& t : tokens) {
+    for (const YAML::Node& t : auth_section.list("tokens")) {
       readSection(t, auth_section.pathOf("tokens") + "[]", [&](Section& s) {
         TokenConfig token;
         token.token = s.required<std::string>("token");
@@ -108,9 +128,7 @@ void readAuth(Section& auth_section, AuthConfig& auth) {
       });
     }
   }
-  if (const YAML::Node origins = auth_section.child("allowed_origins")) {
-    auth.allowed_origins = origins.as<std::vector<std::string>>();
-  }
+  auth_section.read("allowed_origins", auth.allowed_origins);
 }
 
 void readLimits(Section& s, LimitsConfig& limits) {
@@ -146,11 +164,9 @@ void readSlam2dLoopClosure(Section& s, slam2d::LoopClosureOptions& loop) {
 }
 
 void readSlam2d(Section& s, Slam2dConfig& slam2d) {
-  if (const YAML::Node files = s.child("calibrations")) {
-    for (const auto& [model, file] : files.as<std::map<std::string, std::string>>()) {
-      slam2d.calibration_files[model] = file;
-    }
-  }
+  std::map<std::string, std::string> files;
+  s.read("calibrations", files);
+  for (const auto& [model, file] : files) slam2d.calibration_files[model] = file;
   slam2d::Slam2dOptions& o = slam2d.options;
   s.read("resolution_m", o.resolution_m);
   s.read("range_min_m", o.range_min_m);
@@ -177,7 +193,7 @@ size_t batchRequestBytes(size_t points) {
 void loadConfigFile(const std::filesystem::path& file, Config& config) {
   try {
     readSection(YAML::LoadFile(file.string()), "", [&](Section& root) {
-      if (const YAML::Node listen = root.child("listen")) setListenAddress(listen.as<std::string>(), config);
+      if (const YAML::Node listen = root.child("listen")) setListenAddress(root.as<std::string>("listen", listen), config);
       root.read("data_dir", config.data_dir);
       root.read("web_root", config.web_root);
       root.read("io_threads", config.io_threads);

@@ -133,6 +133,16 @@ TEST(LoadConfigFile, BadTypesThrowNamingTheFile) {
             std::string::npos);
   EXPECT_NE(loadError("auth:\n  tokens:\n    - {token: some-secret}\n").find("auth.tokens[].role is required"),
             std::string::npos);
+  // Not a list: refused, where iterating it would have left no token at all.
+  EXPECT_NE(loadError("auth:\n  tokens: 5\n").find("auth.tokens must be a list"), std::string::npos);
+  EXPECT_NE(loadError("auth:\n  tokens: {token: some-secret, role: admin}\n").find("auth.tokens must be a list"),
+            std::string::npos);
+  // A value of the wrong kind names its key and its place.
+  EXPECT_NE(loadError("maps:\n  resolution_m: abc\n").find("maps.resolution_m: a value of the wrong kind (line 2"),
+            std::string::npos);
+  EXPECT_NE(loadError("auth:\n  allowed_origins: 3\n").find("auth.allowed_origins: a value of the wrong kind"),
+            std::string::npos);
+  EXPECT_NE(loadError("listen: [1]\n").find("listen: a value of the wrong kind"), std::string::npos);
 }
 
 TEST(LoadConfigFile, BadListenAddressThrowsNamingTheFile) {
