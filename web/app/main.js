@@ -807,7 +807,8 @@ function renderStats() {
   add('tiles', `${tiles.drawn.size} drawn, ${tiles.loadedCount()} cached`);
   const pending = tiles.pending();
   const stale = tiles.staleDrawn();
-  if (pending || stale) add('loading', `${pending} missing, ${stale} updating`);
+  // Always a row, so that the controls below do not jump as tiles come and go.
+  add('loading', pending || stale ? `${pending} missing, ${stale} updating` : 'none');
   if (tiles.epoch !== null) add('epoch', String(tiles.epoch));
   $('map-stats').replaceChildren(...rows);
 }
