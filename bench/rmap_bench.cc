@@ -126,6 +126,13 @@ int main(int argc, char** argv) {
                 "corrected CARMEN log of the same run whose poses judge the closures (scans found by their ranges); "
                 "repeat for several judges, the first gives the headline figures");
   d->add_option("--submap-keyframes", slam2d.slam.loop_closure.submap_keyframes, "keyframes per loop-closure submap");
+  d->add_option("--rerender-shift-m", slam2d.slam.loop_closure.rerender_shift_m,
+                "a correction moving a keyframe this far (m) re-renders the map");
+  d->add_option("--rerender-shift-rad", slam2d.slam.loop_closure.rerender_shift_rad,
+                "a correction turning a keyframe this much (rad) re-renders the map");
+  d->add_option("--rerender-checkpoints", slam2d.slam.loop_closure.rerender_checkpoints,
+                "map copies kept along the keyframes, where a re-rendering after a correction starts (0: from the first keyframe)")
+      ->check(CLI::NonNegativeNumber);
   d->add_option("--local-map-keyframes", slam2d.slam.local_map_keyframes,
                 "a sparse trajectory's scans are matched against its newest keyframes only (this many at most; 0: the whole map)");
   d->add_option("--sparse-scan-motion", slam2d.slam.sparse_scan_motion_m,

@@ -395,6 +395,7 @@ int runSlam2dBench(const Slam2dBenchOptions& options) {
                     {"confirmed_at_end", confirmed_at_end.size()},
                     {"optimizations", lc->optimizations},
                     {"graph_versions", slam.graphVersion()},
+                    {"rerendered_keyframes", slam.rerenderedKeyframes()},
                     {"optimization_s", lc->optimization_s},
                     {"search_s", lc->search_s},
                     {"submaps_built", lc->submaps_built}});

@@ -6,8 +6,13 @@
 /// Chunks are found through an open-addressing hash table (linear probing,
 /// load ≤ 1/2) keyed by chunk indices: a read is one multiply, usually one
 /// probe and two loads, which keeps the scan matcher's hot path cheap while
-/// robots far apart cost nothing for the space between them. Cells never move
-/// once allocated. Reads are const and may run concurrently; writes may not.
+/// robots far apart cost nothing for the space between them.
+///
+/// A copy shares its chunks with the original (a snapshot costs the hash
+/// table only); the first write to a shared chunk copies that chunk. So a
+/// cell stays in place across writes unless a copy of the grid was taken
+/// since; a Cursor must not outlive a copy. Reads are const and may run
+/// concurrently; writes may not, nor a copy during a write.
 
 #include <array>
 #include <cstdint>
@@ -35,7 +40,7 @@ class ChunkedGrid {
   Cell& at(int x, int y) { return (*chunkAt(x >> kChunkBits, y >> kChunkBits))[offset(x, y)]; }
 
   /// The chunk of the last cell reached through it: a walk over neighbouring cells (a ray)
-  /// then mostly skips the hash table. Stays valid as chunks are added (they never move).
+  /// then mostly skips the hash table. Stays valid as chunks are added, not across a copy.
   struct Cursor {
     int cx = 0, cy = 0;
     Chunk* chunk = nullptr;
@@ -62,24 +67,32 @@ class ChunkedGrid {
   }
   size_t slotOf(uint64_t key) const { return static_cast<size_t>((key * 0x9E3779B97F4A7C15ull) >> shift_); }
 
-  const Chunk* findChunk(int cx, int cy) const {
-    if (table_.empty()) return nullptr;
+  /// Index into chunks_, −1 when the chunk was never written.
+  int32_t indexOf(int cx, int cy) const {
+    if (table_.empty()) return -1;
     const uint64_t key = keyOf(cx, cy);
     const size_t mask = table_.size() - 1;
     for (size_t s = slotOf(key);; s = (s + 1) & mask) {
       const Slot& slot = table_[s];
-      if (slot.index < 0) return nullptr;
-      if (slot.key == key) return chunks_[static_cast<size_t>(slot.index)].get();
+      if (slot.index < 0 || slot.key == key) return slot.index;
     }
   }
+  const Chunk* findChunk(int cx, int cy) const {
+    const int32_t index = indexOf(cx, cy);
+    return index < 0 ? nullptr : chunks_[static_cast<size_t>(index)].get();
+  }
 
+  /// A chunk this grid alone holds, ready for writing.
   Chunk* chunkAt(int cx, int cy) {
-    Chunk* chunk = const_cast<Chunk*>(findChunk(cx, cy));
-    return chunk ? chunk : insertChunk(cx, cy);
+    const int32_t index = indexOf(cx, cy);
+    if (index < 0) return insertChunk(cx, cy);
+    std::shared_ptr<Chunk>& chunk = chunks_[static_cast<size_t>(index)];
+    if (chunk.use_count() > 1) chunk = std::make_shared<Chunk>(*chunk);  // shared with a copy
+    return chunk.get();
   }
   Chunk* insertChunk(int cx, int cy) {
     if (2 * (chunks_.size() + 1) > table_.size()) rehash(table_.empty() ? 64 : 2 * table_.size());
-    chunks_.push_back(std::make_unique<Chunk>());
+    chunks_.push_back(std::make_shared<Chunk>());
     place(keyOf(cx, cy), static_cast<int32_t>(chunks_.size() - 1));
     return chunks_.back().get();
   }
@@ -100,7 +113,7 @@ class ChunkedGrid {
       if (slot.index >= 0) place(slot.key, slot.index);
   }
 
-  std::vector<std::unique_ptr<Chunk>> chunks_;
+  std::vector<std::shared_ptr<Chunk>> chunks_;  ///< shared with copies until written
   std::vector<Slot> table_;  ///< capacity a power of two
   int shift_ = 64;           ///< 64 − log2(capacity): Fibonacci hashing takes the top bits
 };

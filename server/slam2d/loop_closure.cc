@@ -62,6 +62,7 @@ void LoopClosureOptions::validate() const {
   requireLoopOption(cached_submaps >= 1, "cached_submaps must be ≥ 1");
   requireLoopOption(nonNegative(match_point_spacing_m), "match_point_spacing_m must be ≥ 0");
   requireLoopOption(nonNegative(rerender_shift_m) && nonNegative(rerender_shift_rad), "rerender_shift_* must be ≥ 0");
+  requireLoopOption(rerender_checkpoints >= 0, "rerender_checkpoints must be ≥ 0");
   requireLoopOption(submap.levels >= 1 && submap.levels <= 8, "submap.levels must be in [1, 8]");
   requireLoopOption(submap.unknown_probability >= 0.0f && submap.unknown_probability <= 1.0f,
                     "submap.unknown_probability must be in [0, 1]");

@@ -126,6 +126,11 @@ struct LoopClosureOptions {
   /// insertion of every keyframe).
   double rerender_shift_m = 0.025;
   double rerender_shift_rad = 0.005;
+  /// Copies of the map kept along the keyframes (see MapCheckpoints): a
+  /// re-rendering starts from the last one before the first keyframe that
+  /// moved beyond rerender_shift_*; the keyframes before it stay where they
+  /// are, as after a small correction. 0: always from the first keyframe.
+  int rerender_checkpoints = 16;
   /// Correlative search: a fixed rotation step (0.5°) instead of the one that
   /// moves the farthest endpoint by a cell (0.1° at 30 m, five times the
   /// rotations); Gauss–Newton refines the rest.

@@ -42,6 +42,9 @@ class OccupancyGrid {
   };
 
   explicit OccupancyGrid(double resolution_m);
+  /// A copy shares the cells until either side writes them (see ChunkedGrid).
+  OccupancyGrid(const OccupancyGrid&) = default;
+  OccupancyGrid& operator=(const OccupancyGrid&) = default;
   OccupancyGrid(OccupancyGrid&&) noexcept = default;
   OccupancyGrid& operator=(OccupancyGrid&&) noexcept = default;
 

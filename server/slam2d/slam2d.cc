@@ -1,5 +1,6 @@
 #include "slam2d/slam2d.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -72,7 +73,9 @@ void Slam2dOptions::validate() const {
 }
 
 Slam2d::Slam2d(Slam2dOptions options)
-    : options_((options.validate(), options)), map_(options_.resolution_m, options_.levels) {
+    : options_((options.validate(), options)),
+      map_(options_.resolution_m, options_.levels),
+      checkpoints_(options_.loop_closure.enabled ? static_cast<size_t>(options_.loop_closure.rerender_checkpoints) : 0) {
   options_.matcher.reflectivity_weight = options_.reflectivity_weight;
   if (options_.loop_closure.enabled) {
     LoopClosureOptions loop = options_.loop_closure;
@@ -88,6 +91,7 @@ void Slam2d::setCalibration(const std::string& model, IntensityCalibration calib
   ScannerModel& m = models_[model];
   m.calibration = std::move(calibration);
   m.sampler.reset();
+  checkpoints_.clear();  // their keyframes of this model hold no (or another) reflectivity
 }
 
 const IntensityCalibration* Slam2d::calibration(const std::string& model) const {
@@ -108,6 +112,7 @@ void Slam2d::maybeSelfCalibrate(ScannerModel& model) {
     }
     model.calibration = std::move(calibration);
     model.sampler.reset();
+    checkpoints_.clear();  // they hold this model's keyframes without reflectivity
   } catch (const std::exception&) {
     // Not enough independent views yet (the fit says why): collect more, or stop when full.
     sampler.postpone();
@@ -288,6 +293,7 @@ Pose2 Slam2d::addScan(const std::string& trajectory, const LaserScan& scan, cons
     }
     track.keyframe = keyframes_.size();
     keyframes_.push_back(std::move(kf));
+    checkpoints_.offer(keyframes_.size(), map_);
     keyframe_added = true;
   }
   track.last_increment = is_new ? Pose2{} : between(track.pose, estimate);
@@ -320,21 +326,31 @@ void Slam2d::applyCorrection(const std::vector<std::pair<Pose2, Pose2>>& relativ
     t.pose = k * relative_to_keyframe[t.index].first;
     t.last_update_pose = k * relative_to_keyframe[t.index].second;
   }
-  bool far = false;
-  for (size_t i = 0; i < keyframes_.size() && !far; ++i) {
-    const Pose2 d = between(rendered_[i], keyframes_[i].pose);
-    far = d.translation().norm() > options_.loop_closure.rerender_shift_m ||
-          std::abs(d.theta_rad) > options_.loop_closure.rerender_shift_rad;
+  // The first keyframe the graph moved beyond the shift; those before it stay where the map holds them.
+  size_t moved = 0;
+  for (; moved < keyframes_.size(); ++moved) {
+    const Pose2 d = between(rendered_[moved], keyframes_[moved].pose);
+    if (d.translation().norm() > options_.loop_closure.rerender_shift_m ||
+        std::abs(d.theta_rad) > options_.loop_closure.rerender_shift_rad)
+      break;
   }
-  if (!far) return;
-  for (size_t i = 0; i < keyframes_.size(); ++i) rendered_[i] = keyframes_[i].pose;
+  if (moved == keyframes_.size()) return;
+  size_t from = 0;
   GridMap2d map(options_.resolution_m, options_.levels);
-  for (const Keyframe& kf : keyframes_) {
-    insertKeyframe(map, kf, kf.pose, calibrationOf(kf), options_.occupancy);
+  if (const MapCheckpoints::Checkpoint* checkpoint = checkpoints_.latestUpTo(moved)) {
+    from = checkpoint->keyframes;
+    map = checkpoint->map;
+  }
+  for (size_t k = from; k < keyframes_.size(); ++k) {
+    insertKeyframe(map, keyframes_[k], keyframes_[k].pose, calibrationOf(keyframes_[k]), options_.occupancy);
+    rendered_[k] = keyframes_[k].pose;
+    checkpoints_.offer(k + 1, map);
   }
   map_ = std::move(map);
+  rerendered_keyframes_ += keyframes_.size() - from;
   for (std::deque<LocalMap>& maps : local_maps_)
     for (LocalMap& local : maps) {
+      if (std::none_of(local.keyframes.begin(), local.keyframes.end(), [&](size_t k) { return k >= from; })) continue;
       local.grid = GridMap2d(options_.resolution_m, options_.levels);
       for (size_t k : local.keyframes)
         insertKeyframe(local.grid, keyframes_[k], keyframes_[k].pose, calibrationOf(keyframes_[k]), options_.occupancy);

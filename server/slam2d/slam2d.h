@@ -39,6 +39,7 @@
 #include "slam2d/keyframe.h"
 #include "slam2d/laser_scan.h"
 #include "slam2d/loop_closure.h"
+#include "slam2d/map_checkpoints.h"
 #include "slam2d/pose2.h"
 #include "slam2d/scan_matcher.h"
 #include "slam2d/self_calibration.h"
@@ -186,9 +187,12 @@ class Slam2d {
   std::vector<StampedPose2> trajectory(const std::string& trajectory) const;
   /// Increments after each optimisation that moved a keyframe beyond
   /// LoopClosureOptions::rerender_shift_* from where the map holds it; grid()
-  /// is then re-rendered from the keyframes at their corrected poses
-  /// (version() changes too). Smaller corrections move the poses only.
+  /// is then re-rendered at their corrected poses from that keyframe on (from
+  /// the map copy before it, see rerender_checkpoints; version() changes too).
+  /// Smaller corrections move the poses only.
   uint64_t graphVersion() const { return graph_version_; }
+  /// Keyframe insertions spent re-rendering the map after corrections (what rerender_checkpoints saves).
+  uint64_t rerenderedKeyframes() const { return rerendered_keyframes_; }
   /// Loop closure counters and timing; nullptr when loop closure is off.
   const LoopClosureStats* loopClosureStats() const { return loop_closer_ ? &loop_closer_->stats() : nullptr; }
   size_t keyframeCount() const { return keyframes_.size(); }
@@ -228,8 +232,8 @@ class Slam2d {
 
   /// Self-calibrates `model` from its sample when ready; fuses the sample on success.
   void maybeSelfCalibrate(ScannerModel& model);
-  /// After the graph moved keyframes: the map is rendered again from them and
-  /// every trajectory's pose follows its newest keyframe.
+  /// After the graph moved keyframes: the map is rendered again from the first
+  /// that moved and every trajectory's pose follows its newest keyframe.
   void applyCorrection(const std::vector<std::pair<Pose2, Pose2>>& relative_to_keyframe);
   /// Adds `keyframe` (to be keyframes_[k]) to its trajectory's local maps,
   /// starting and dropping maps as they fill.
@@ -248,9 +252,11 @@ class Slam2d {
   std::vector<Keyframe> keyframes_;
   std::vector<std::deque<LocalMap>> local_maps_;  ///< by trajectory index, the front one matched
   std::vector<Pose2> rendered_;  ///< per keyframe, the pose the map holds it at (loop closure only)
+  MapCheckpoints checkpoints_;   ///< map_ along the keyframes, where re-rendering can start (loop closure only)
   std::unique_ptr<LoopCloser> loop_closer_;
   uint64_t version_ = 0;
   uint64_t graph_version_ = 0;
+  uint64_t rerendered_keyframes_ = 0;
 };
 
 }  // namespace rmap::slam2d

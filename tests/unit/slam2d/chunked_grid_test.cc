@@ -60,5 +60,29 @@ TEST(ChunkedGrid, ACursorReachesTheSameCellsAsDirectAccessAcrossChunks) {
   }
 }
 
+TEST(ChunkedGrid, ACopySharesChunksUntilEitherSideWritesThem) {
+  ChunkedGrid<int> original;
+  for (int k = 0; k < 200; ++k) original.at(k, -k) = k;  // four chunks
+  ChunkedGrid<int> copy = original;
+  EXPECT_EQ(copy.find(5, -5), original.find(5, -5)) << "a copy shares the chunks";
+  // Writes through a cursor and directly, on both sides: the other side keeps its values.
+  ChunkedGrid<int>::Cursor cursor;
+  copy.at(5, -5, cursor) = -1;
+  copy.at(6, -6, cursor) = -2;
+  original.at(150, -150) = -3;
+  copy.at(1000, 1000) = 7;  // a chunk only the copy has
+  EXPECT_EQ(*original.find(5, -5), 5);
+  EXPECT_EQ(*original.find(6, -6), 6);
+  EXPECT_EQ(*copy.find(5, -5), -1);
+  EXPECT_EQ(*copy.find(6, -6), -2);
+  EXPECT_EQ(*copy.find(150, -150), 150);
+  EXPECT_EQ(*original.find(150, -150), -3);
+  EXPECT_EQ(original.find(1000, 1000), nullptr);
+  // A chunk neither side wrote is still shared; a written one is not.
+  EXPECT_EQ(copy.find(100, -100), original.find(100, -100));
+  EXPECT_NE(copy.find(5, -5), original.find(5, -5));
+  EXPECT_EQ(copy.chunkCount(), original.chunkCount() + 1);
+}
+
 }  // namespace
 }  // namespace rmap::slam2d

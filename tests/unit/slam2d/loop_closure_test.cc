@@ -114,6 +114,53 @@ TEST_F(SimulatedLoop, ClosesBetweenTwoTrajectories) {
   EXPECT_LT(std::abs(normalizeAngle(end.theta_rad - b.back().theta_rad)), 0.03);
 }
 
+// Re-rendering from the map copy before the first keyframe the graph moved
+// (rerender_checkpoints) inserts fewer keyframes than re-rendering from the
+// first, and gives the same run: the keyframes it leaves in place moved less
+// than the re-render shift.
+TEST_F(SimulatedLoop, ReRenderingFromACheckpointSavesWorkAndKeepsTheRun) {
+  // Out along the tour, then its first half again without a dropout: the
+  // closures of the second pass correct it, not the first.
+  const std::vector<Pose2> out = testing::smoothTurns(std::vector<Pose2>(tour_->begin(), tour_->begin() + 120), 0.1);
+  const std::vector<Pose2> again = testing::smoothTurns(std::vector<Pose2>(tour_->begin(), tour_->begin() + 60), 0.1);
+  std::vector<Pose2> truth = out;
+  truth.insert(truth.end(), again.begin(), again.end());
+  const sim::Laser2dModel model = sim::Laser2dModel::sickLike();
+  const auto run = [&](int checkpoints) {
+    Slam2dOptions options;
+    options.loop_closure.rerender_checkpoints = checkpoints;
+    Slam2d slam(options);
+    std::mt19937_64 rng(34);
+    for (size_t k = 0; k < truth.size(); ++k)
+      slam.addScan("robot", testing::simScan(*world_, truth[k], model, rng, int64_t(k) * 100'000'000), truth[k]);
+    return slam;
+  };
+  const Slam2d from_first = run(0), from_checkpoint = run(16);
+  ASSERT_GT(from_first.graphVersion(), 0u);
+  ASSERT_GT(from_checkpoint.graphVersion(), 0u);
+  // The second pass moved, the first stayed: from its end, not from its start (here 10 keyframes against 380).
+  EXPECT_LT(4 * from_checkpoint.rerenderedKeyframes(), from_first.rerenderedKeyframes());
+  const std::vector<StampedPose2> a = from_first.trajectory("robot"), b = from_checkpoint.trajectory("robot");
+  ASSERT_EQ(a.size(), b.size());
+  for (size_t i = 0; i < a.size(); ++i)
+    EXPECT_LT((a[i].pose.translation() - b[i].pose.translation()).norm(), 0.05) << "scan " << i;
+  EXPECT_LT(rmsError(b, truth), 0.06);
+  // The maps agree on whether a cell is occupied, free or unknown nearly everywhere (here 99 %).
+  const GridMap2d& grid_a = from_first.grid();
+  const GridMap2d& grid_b = from_checkpoint.grid();
+  Eigen::AlignedBox2i cells = grid_a.knownCells();
+  cells.extend(grid_b.knownCells());
+  size_t known = 0, differ = 0;
+  for (int x = cells.min().x(); x <= cells.max().x(); ++x)
+    for (int y = cells.min().y(); y <= cells.max().y(); ++y) {
+      const float pa = grid_a.probability({x, y}), pb = grid_b.probability({x, y});
+      if (std::isnan(pa) && std::isnan(pb)) continue;
+      ++known;
+      differ += std::isnan(pa) != std::isnan(pb) || (pa > 0.5f) != (pb > 0.5f);
+    }
+  EXPECT_LT(double(differ), 0.02 * double(known));
+}
+
 // The hold (confirm_after_s) only delays reports: the graph, and so the
 // trajectory, is the same, and every closure reported with it is one reported
 // without, at the same scan or later.
