@@ -54,6 +54,11 @@ class ChunkedGrid {
 
   /// Number of allocated chunks.
   size_t chunkCount() const { return chunks_.size(); }
+  /// Calls fn(const void*) with each chunk's address: copies that share a chunk give the same one.
+  template <class Fn>
+  void forEachChunk(Fn&& fn) const {
+    for (const std::shared_ptr<Chunk>& chunk : chunks_) fn(static_cast<const void*>(chunk.get()));
+  }
 
  private:
   struct Slot {

@@ -39,6 +39,13 @@ class GridMap2d {
   const OccupancyGrid& level(int i) const { return levels_[static_cast<size_t>(i)]; }
   const ReflectivityLayer& reflectivityLayer() const { return reflectivity_; }
   bool empty() const { return levels_.front().knownCells().isEmpty(); }
+  /// Storage chunks of every level and of the reflectivity layer, by address
+  /// (copies share the ones neither side wrote since; see ChunkedGrid).
+  template <class Fn>
+  void forEachChunk(Fn&& fn) const {
+    for (const OccupancyGrid& level : levels_) level.forEachChunk(fn);
+    reflectivity_.forEachChunk(fn);
+  }
 
   /// Inserts one scan into every level (see OccupancyGrid::insert).
   void insert(const Eigen::Vector2d& origin_m, std::span<const Ray> rays, const OccupancyUpdate& update,

@@ -58,6 +58,11 @@ class OccupancyGrid {
   float probability(const Eigen::Vector2i& cell) const;
   /// Bilinear value and gradient at a map-frame point (m).
   Sample sample(const Eigen::Vector2d& p_m) const;
+  /// Storage chunks, by address (see ChunkedGrid::forEachChunk).
+  template <class Fn>
+  void forEachChunk(Fn&& fn) const {
+    cells_.forEachChunk(fn);
+  }
 
   /// Inserts one scan: free evidence along each ray, hit evidence at each
   /// endpoint; within one call a cell changes at most once, and a hit wins over

@@ -37,6 +37,11 @@ class ReflectivityLayer {
   /// Bilinear over the cells with reflectivity only (weights renormalised),
   /// cell values at cell centres, like OccupancyGrid::sample.
   Sample sample(const Eigen::Vector2d& p_m) const;
+  /// Storage chunks, by address (see ChunkedGrid::forEachChunk).
+  template <class Fn>
+  void forEachChunk(Fn&& fn) const {
+    cells_.forEachChunk(fn);
+  }
 
  private:
   struct Cell {

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <vector>
 
@@ -98,6 +99,32 @@ TEST(MapCheckpoints, RenderingOnFromACopyGivesTheMapRenderedFromTheStart) {
   // Writing on from the copy changed neither the copy nor the live map.
   expectSameMaps(checkpoint->map, render(0, 32));
   expectSameMaps(live, from_start);
+}
+
+TEST(MapCheckpoints, CopiesNeverHoldMoreChunksOfTheirOwnThanTheMap) {
+  // A robot driving the same 6 m of corridor to and fro: every scan rewrites the chunks of the
+  // last copies, so each copy soon holds a whole map of its own.
+  MapCheckpoints checkpoints(16);
+  GridMap2d live(kResolution_m, kLevels);
+  size_t most = 0;
+  for (int k = 0; k < 400; ++k) {
+    insertScan(live, (k / 60) % 2 == 0 ? k % 60 : 59 - k % 60);
+    checkpoints.offer(static_cast<size_t>(k + 1), live);
+    size_t map_chunks = 0;
+    live.forEachChunk([&](const void*) { ++map_chunks; });
+    // The bound holds as a copy is taken; until the next one the map's writes add at most itself.
+    ASSERT_LE(checkpoints.chunksOfTheirOwn(live), (MapCheckpoints::kMaxOwnChunksPerMapChunk + 1) * map_chunks)
+        << "scan " << k;
+    most = std::max(most, checkpoints.size());
+  }
+  EXPECT_GE(most, 2u);  // (without the bound the copies' own chunks pass 5 maps by scan 400)
+  // What is left still renders on to the map rendered from the start.
+  const MapCheckpoints::Checkpoint* checkpoint = checkpoints.latestUpTo(400);
+  ASSERT_NE(checkpoint, nullptr);
+  GridMap2d resumed = checkpoint->map;
+  for (int k = static_cast<int>(checkpoint->keyframes); k < 400; ++k)
+    insertScan(resumed, (k / 60) % 2 == 0 ? k % 60 : 59 - k % 60);
+  expectSameMaps(resumed, live);
 }
 
 }  // namespace
