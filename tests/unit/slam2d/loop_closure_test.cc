@@ -25,6 +25,25 @@ class SimulatedLoop : public ::testing::Test {
     delete tour_;
   }
 
+  /// The first 120 poses of the tour, then its first 60 again: the second pass revisits the first.
+  static std::vector<Pose2> outAndAgain() {
+    std::vector<Pose2> path = testing::smoothTurns(std::vector<Pose2>(tour_->begin(), tour_->begin() + 120), 0.1);
+    const std::vector<Pose2> again = testing::smoothTurns(std::vector<Pose2>(tour_->begin(), tour_->begin() + 60), 0.1);
+    path.insert(path.end(), again.begin(), again.end());
+    return path;
+  }
+
+  /// A fresh Slam2d driven along `truth` with the SICK-like laser (scans 0.1 s apart, noise seeded by `seed`).
+  static Slam2d drive(const Slam2dOptions& options, const std::vector<Pose2>& truth, const std::vector<Pose2>& odometry,
+                      uint64_t seed) {
+    const sim::Laser2dModel model = sim::Laser2dModel::sickLike();
+    Slam2d slam(options);
+    std::mt19937_64 rng(seed);
+    for (size_t k = 0; k < truth.size(); ++k)
+      slam.addScan("robot", testing::simScan(*world_, truth[k], model, rng, int64_t(k) * 100'000'000), odometry[k]);
+    return slam;
+  }
+
   static sim::VoxelWorld* world_;
   static std::vector<Pose2>* tour_;
 };
@@ -52,15 +71,10 @@ TEST_F(SimulatedLoop, ClosingTheLoopEndsCloserToTruth) {
     truth.push_back(p);
     odo.push_back(again.front() * offset * between(again.front(), p));
   }
-  const sim::Laser2dModel model = sim::Laser2dModel::sickLike();
   auto run = [&](bool loop_closure) {
     Slam2dOptions options;
     options.loop_closure.enabled = loop_closure;
-    Slam2d slam(options);
-    std::mt19937_64 rng(31);
-    for (size_t k = 0; k < truth.size(); ++k)
-      slam.addScan("robot", testing::simScan(*world_, truth[k], model, rng, int64_t(k) * 100'000'000), odo[k]);
-    return slam;
+    return drive(options, truth, odo, 31);
   };
   const Slam2d without = run(false);
   Slam2d with = run(true);
@@ -121,19 +135,11 @@ TEST_F(SimulatedLoop, ClosesBetweenTwoTrajectories) {
 TEST_F(SimulatedLoop, ReRenderingFromACheckpointSavesWorkAndKeepsTheRun) {
   // Out along the tour, then its first half again without a dropout: the
   // closures of the second pass correct it, not the first.
-  const std::vector<Pose2> out = testing::smoothTurns(std::vector<Pose2>(tour_->begin(), tour_->begin() + 120), 0.1);
-  const std::vector<Pose2> again = testing::smoothTurns(std::vector<Pose2>(tour_->begin(), tour_->begin() + 60), 0.1);
-  std::vector<Pose2> truth = out;
-  truth.insert(truth.end(), again.begin(), again.end());
-  const sim::Laser2dModel model = sim::Laser2dModel::sickLike();
+  const std::vector<Pose2> truth = outAndAgain();
   const auto run = [&](int checkpoints) {
     Slam2dOptions options;
     options.loop_closure.rerender_checkpoints = checkpoints;
-    Slam2d slam(options);
-    std::mt19937_64 rng(34);
-    for (size_t k = 0; k < truth.size(); ++k)
-      slam.addScan("robot", testing::simScan(*world_, truth[k], model, rng, int64_t(k) * 100'000'000), truth[k]);
-    return slam;
+    return drive(options, truth, truth, 34);
   };
   const Slam2d from_first = run(0), from_checkpoint = run(16);
   ASSERT_GT(from_first.graphVersion(), 0u);
@@ -165,10 +171,7 @@ TEST_F(SimulatedLoop, ReRenderingFromACheckpointSavesWorkAndKeepsTheRun) {
 // trajectory, is the same, and every closure reported with it is one reported
 // without, at the same scan or later.
 TEST_F(SimulatedLoop, HoldingClosuresDelaysTheirReportsOnly) {
-  const std::vector<Pose2> out = testing::smoothTurns(std::vector<Pose2>(tour_->begin(), tour_->begin() + 120), 0.1);
-  const std::vector<Pose2> again = testing::smoothTurns(std::vector<Pose2>(tour_->begin(), tour_->begin() + 60), 0.1);
-  std::vector<Pose2> truth = out;
-  truth.insert(truth.end(), again.begin(), again.end());
+  const std::vector<Pose2> truth = outAndAgain();
   const sim::Laser2dModel model = sim::Laser2dModel::sickLike();
   struct Report {
     size_t scan = 0;
