@@ -3,7 +3,7 @@
 /// Copies of the 2D map as it stood after its first k keyframes. A loop
 /// correction mostly moves the newer part of the trajectory: the map is then
 /// rendered again from the last copy before the first keyframe that moved,
-/// not from the first keyframe (raw intel: 32× fewer keyframe insertions).
+/// not from the first keyframe (raw intel: 7× fewer keyframe insertions).
 /// Copies share the chunks neither side wrote since (ChunkedGrid), so one
 /// costs about the area mapped after it. The oldest are dropped when the
 /// copies' own chunks outnumber the map's kMaxOwnChunksPerMapChunk times (a
