@@ -144,6 +144,12 @@ int main(int argc, char** argv) {
   d->add_option("--loop-min-score", slam2d.slam.loop_closure.min_score, "correlative score a loop closure needs");
   d->add_option("--loop-ambiguity-margin", slam2d.slam.loop_closure.submap.ambiguity_margin,
                 "a loop match is ambiguous when a pose away from it scores within this margin (0: no check)");
+  d->add_option("--loop-ambiguous-min-score", slam2d.slam.loop_closure.ambiguous_min_score,
+                "correlative score an ambiguous loop match against a dense submap needs");
+  d->add_option("--loop-confirm-after", slam2d.slam.loop_closure.confirm_after_s,
+                "sensor time (s) a closure one optimisation kept waits for a later one before it is reported");
+  d->add_option("--loop-min-points", slam2d.slam.loop_closure.min_match_points,
+                "match points a keyframe needs to search for loop closures");
   rmap::bench::ReplayCheckOptions replay;
   replay.shared_data_dir = RMAP_SHARED_DATA_DIR;
   CLI::App* r = app.add_subcommand("replay-check",

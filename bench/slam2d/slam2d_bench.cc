@@ -387,6 +387,7 @@ int runSlam2dBench(const Slam2dBenchOptions& options) {
                     {"searches", lc->searches},
                     {"matches", lc->matches},
                     {"ambiguous", lc->ambiguous},
+                    {"weak_ambiguous", lc->weak_ambiguous},
                     {"accepted", lc->accepted},
                     {"unsupported", lc->unsupported},
                     {"rejected_after_optimization", lc->rejected_after_optimization},

@@ -44,6 +44,8 @@ void LoopClosureOptions::validate() const {
   requireLoopOption(min_score > 0.0 && min_score <= 1.0, "min_score must be in (0, 1]");
   requireLoopOption(sparse_min_score > 0.0 && sparse_min_score <= 1.0, "sparse_min_score must be in (0, 1]");
   requireLoopOption(nonNegative(sparse_keyframe_spacing_m), "sparse_keyframe_spacing_m must be ≥ 0");
+  requireLoopOption(ambiguous_min_score >= 0.0 && ambiguous_min_score <= 1.0, "ambiguous_min_score must be in [0, 1]");
+  requireLoopOption(min_match_points >= 0, "min_match_points must be ≥ 0");
   requireLoopOption(sparse_raster_dilation_cells >= 0 && sparse_raster_dilation_cells <= 10 && submap.raster_dilation_cells >= 0 &&
                         submap.raster_dilation_cells <= 10,
                     "raster dilation must be in [0, 10] cells");
@@ -163,7 +165,7 @@ bool LoopCloser::addKeyframe(std::vector<Keyframe>& keyframes) {
 
 void LoopCloser::search(std::vector<Keyframe>& keyframes, size_t query, TrajectoryState& trajectory) {
   const Keyframe& kf = keyframes[query];
-  if (kf.match_points.empty()) return;
+  if (kf.match_points.empty() || kf.match_points.size() < static_cast<size_t>(options_.min_match_points)) return;
   const double travel = trajectory.travel_since_closure_m;
   const double window_m = std::min(options_.max_window_m, options_.window_m + options_.window_growth_m_per_m * travel);
   const double window_rad =
@@ -191,11 +193,14 @@ void LoopCloser::search(std::vector<Keyframe>& keyframes, size_t query, Trajecto
     const size_t anchor = submaps_[s].anchor();
     const Pose2 center = between(keyframes[anchor].pose, kf.pose);
     ++stats_.searches;
-    const double min_score =
-        submaps_[s].sparse(options_.sparse_keyframe_spacing_m) ? options_.sparse_min_score : options_.min_score;
-    const std::optional<SubmapMatch> m =
-        matcher(keyframes, s).match(kf.match_points, center, window_m, window_rad, min_score);
+    const bool sparse = submaps_[s].sparse(options_.sparse_keyframe_spacing_m);
+    const std::optional<SubmapMatch> m = matcher(keyframes, s).match(
+        kf.match_points, center, window_m, window_rad, sparse ? options_.sparse_min_score : options_.min_score);
     if (!m) continue;
+    if (m->ambiguous() && !sparse && m->score < options_.ambiguous_min_score) {
+      ++stats_.weak_ambiguous;
+      continue;
+    }
     std::vector<std::pair<size_t, Pose2>> members;  // matcher() left this submap first in the cache
     for (size_t i = 0; i < submaps_[s].keyframes.size(); ++i)
       members.emplace_back(submaps_[s].keyframes[i], cache_.front().relative[i]);

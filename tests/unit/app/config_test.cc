@@ -376,6 +376,8 @@ slam2d:
     enabled: false
     min_score: 0.62
     sparse_min_score: 0.75
+    ambiguous_min_score: 0.7
+    min_match_points: 20
     max_window_m: 3
     max_window_rad: 0.5
     confirm_after_s: 0
@@ -395,6 +397,8 @@ slam2d:
   EXPECT_FALSE(o.loop_closure.enabled);
   EXPECT_EQ(o.loop_closure.min_score, 0.62);
   EXPECT_EQ(o.loop_closure.sparse_min_score, 0.75);
+  EXPECT_EQ(o.loop_closure.ambiguous_min_score, 0.7);
+  EXPECT_EQ(o.loop_closure.min_match_points, 20);
   EXPECT_EQ(o.loop_closure.max_window_m, 3.0);
   EXPECT_EQ(o.loop_closure.max_window_rad, 0.5);
   EXPECT_EQ(o.loop_closure.confirm_after_s, 0.0);
@@ -406,7 +410,8 @@ slam2d:
 TEST(Slam2dOptions, BadValuesAreRefusedNamingTheSection) {
   for (const char* text : {"slam2d:\n  resolution_m: 0\n", "slam2d:\n  range_max_m: -1\n",
                            "slam2d:\n  loop_closure:\n    min_score: 1.5\n",
-                           "slam2d:\n  loop_closure:\n    confirm_after_s: -1\n"}) {
+                           "slam2d:\n  loop_closure:\n    confirm_after_s: -1\n",
+                           "slam2d:\n  loop_closure:\n    min_match_points: -1\n"}) {
     const YamlFile file(text);
     Config config;
     loadConfigFile(file.path(), config);

@@ -167,6 +167,37 @@ TEST_F(SimulatedLoop, ReRenderingFromACheckpointSavesWorkAndKeepsTheRun) {
   EXPECT_LT(double(differ), 0.02 * double(known));
 }
 
+// A scan with fewer match points than min_match_points does not search; with
+// ambiguous_min_score 1, no ambiguous match against a dense submap is kept
+// (the tour's buildings have no corridor long enough: a wide ambiguity margin
+// makes nearly every match ambiguous).
+TEST_F(SimulatedLoop, ScansWithTooFewPointsAndWeakAmbiguousMatchesCloseNothing) {
+  const std::vector<Pose2> truth = outAndAgain();
+  const auto stats = [&](const Slam2dOptions& options) { return *drive(options, truth, truth, 35).loopClosureStats(); };
+  Slam2dOptions options;
+  const LoopClosureStats defaults = stats(options);
+  EXPECT_GT(defaults.searches, 0u);
+  EXPECT_GT(defaults.accepted, 0u);
+
+  options.loop_closure.min_match_points = 100'000;
+  const LoopClosureStats few_points = stats(options);
+  EXPECT_EQ(few_points.searches, 0u);
+  EXPECT_EQ(few_points.accepted, 0u);
+
+  options = {};
+  options.loop_closure.submap.ambiguity_margin = 0.5;
+  options.loop_closure.ambiguous_min_score = 0.0;
+  const LoopClosureStats none_weak = stats(options);
+  EXPECT_EQ(none_weak.weak_ambiguous, 0u);
+  ASSERT_GT(none_weak.ambiguous, 0u) << "the tour must offer ambiguous matches";
+  options.loop_closure.ambiguous_min_score = 1.0;
+  const LoopClosureStats all_weak = stats(options);
+  EXPECT_EQ(all_weak.ambiguous, 0u);
+  EXPECT_GT(all_weak.weak_ambiguous, 0u);
+  EXPECT_GT(none_weak.accepted, 0u);
+  EXPECT_EQ(all_weak.accepted, 0u) << "every match was ambiguous, and none is kept";
+}
+
 // The hold (confirm_after_s) only delays reports: the graph, and so the
 // trajectory, is the same, and every closure reported with it is one reported
 // without, at the same scan or later.
@@ -233,6 +264,8 @@ TEST(LoopClosureOptions, BadOptionsThrow) {
   throws([](LoopClosureOptions& o) { o.submap.ambiguity_window_m = -1.0; });
   throws([](LoopClosureOptions& o) { o.submap.ambiguity_margin = NAN; });
   throws([](LoopClosureOptions& o) { o.sparse_min_score = 0.0; });
+  throws([](LoopClosureOptions& o) { o.ambiguous_min_score = 1.5; });
+  throws([](LoopClosureOptions& o) { o.min_match_points = -1; });
   throws([](LoopClosureOptions& o) { o.sparse_keyframe_spacing_m = -0.1; });
   throws([](LoopClosureOptions& o) { o.sparse_raster_dilation_cells = -1; });
   // Off, options are still checked: turning it on later must not be the first time they are.
