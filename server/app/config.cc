@@ -163,6 +163,7 @@ void readSlam2dLoopClosure(Section& s, slam2d::LoopClosureOptions& loop) {
   s.read("max_window_m", loop.max_window_m);
   s.read("max_window_rad", loop.max_window_rad);
   s.read("confirm_after_s", loop.confirm_after_s);
+  s.read("rerender_checkpoints", loop.rerender_checkpoints);
 }
 
 void readSlam2d(Section& s, Slam2dConfig& slam2d) {

@@ -381,6 +381,7 @@ slam2d:
     max_window_m: 3
     max_window_rad: 0.5
     confirm_after_s: 0
+    rerender_checkpoints: 0
 )");
   Config config;
   loadConfigFile(file.path(), config);
@@ -402,6 +403,7 @@ slam2d:
   EXPECT_EQ(o.loop_closure.max_window_m, 3.0);
   EXPECT_EQ(o.loop_closure.max_window_rad, 0.5);
   EXPECT_EQ(o.loop_closure.confirm_after_s, 0.0);
+  EXPECT_EQ(o.loop_closure.rerender_checkpoints, 0);
   EXPECT_EQ(o.levels, defaults.levels);
   EXPECT_EQ(o.loop_closure.submap_keyframes, defaults.loop_closure.submap_keyframes);
   EXPECT_NO_THROW(validate(config));
@@ -411,7 +413,8 @@ TEST(Slam2dOptions, BadValuesAreRefusedNamingTheSection) {
   for (const char* text : {"slam2d:\n  resolution_m: 0\n", "slam2d:\n  range_max_m: -1\n",
                            "slam2d:\n  loop_closure:\n    min_score: 1.5\n",
                            "slam2d:\n  loop_closure:\n    confirm_after_s: -1\n",
-                           "slam2d:\n  loop_closure:\n    min_match_points: -1\n"}) {
+                           "slam2d:\n  loop_closure:\n    min_match_points: -1\n",
+                           "slam2d:\n  loop_closure:\n    rerender_checkpoints: -2\n"}) {
     const YamlFile file(text);
     Config config;
     loadConfigFile(file.path(), config);
