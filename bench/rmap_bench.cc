@@ -141,6 +141,8 @@ int main(int argc, char** argv) {
                 "max filter radius (cells) of a sparse submap's loop-closure raster");
   d->add_option("--sparse-min-score", slam2d.slam.loop_closure.sparse_min_score,
                 "correlative score a loop closure against a sparse submap needs");
+  d->add_option("--sparse-loop-edges", slam2d.slam.loop_closure.sparse_loop_edge_keyframes,
+                "keyframes nearest the match a closure against a sparse submap is tied to (0: its anchor)");
   d->add_option("--loop-min-score", slam2d.slam.loop_closure.min_score, "correlative score a loop closure needs");
   d->add_option("--loop-ambiguity-margin", slam2d.slam.loop_closure.submap.ambiguity_margin,
                 "a loop match is ambiguous when a pose away from it scores within this margin (0: no check)");

@@ -158,6 +158,7 @@ void readSlam2dLoopClosure(Section& s, slam2d::LoopClosureOptions& loop) {
   s.read("enabled", loop.enabled);
   s.read("min_score", loop.min_score);
   s.read("sparse_min_score", loop.sparse_min_score);
+  s.read("sparse_loop_edge_keyframes", loop.sparse_loop_edge_keyframes);
   s.read("ambiguous_min_score", loop.ambiguous_min_score);
   s.read("min_match_points", loop.min_match_points);
   s.read("max_window_m", loop.max_window_m);

@@ -46,6 +46,7 @@ void LoopClosureOptions::validate() const {
   requireLoopOption(nonNegative(sparse_keyframe_spacing_m), "sparse_keyframe_spacing_m must be ≥ 0");
   requireLoopOption(ambiguous_min_score >= 0.0 && ambiguous_min_score <= 1.0, "ambiguous_min_score must be in [0, 1]");
   requireLoopOption(min_match_points >= 0, "min_match_points must be ≥ 0");
+  requireLoopOption(sparse_loop_edge_keyframes >= 0, "sparse_loop_edge_keyframes must be ≥ 0");
   requireLoopOption(sparse_raster_dilation_cells >= 0 && sparse_raster_dilation_cells <= 10 && submap.raster_dilation_cells >= 0 &&
                         submap.raster_dilation_cells <= 10,
                     "raster dilation must be in [0, 10] cells");
@@ -144,9 +145,11 @@ bool LoopCloser::addKeyframe(std::vector<Keyframe>& keyframes) {
   std::vector<Pending> still;
   for (Pending& p : pending_) {
     if (p.supported) {
-      const size_t e = graph_.addEdge({p.closure.match, p.closure.query, toGraph(p.closure.relative), p.information, true});
-      loop_edges_.push_back(e);
-      ledger_.await(e, p.closure, keyframes[p.closure.query].trajectory);
+      std::vector<size_t> edges;
+      for (const Pending::Tie& tie : p.ties)
+        edges.push_back(graph_.addEdge({tie.keyframe, p.closure.query, toGraph(tie.relative), tie.information, true}));
+      ledger_.await(edges.front(), p.closure, keyframes[p.closure.query].trajectory);
+      loop_edges_.push_back(std::move(edges));
       awaiting_ = true;
       trajectories_[keyframes[p.closure.query].trajectory].travel_since_closure_m = 0.0;
     } else if (keyframe_count_ - p.added_at <= static_cast<uint64_t>(options_.support_keyframes)) {
@@ -201,7 +204,7 @@ void LoopCloser::search(std::vector<Keyframe>& keyframes, size_t query, Trajecto
       ++stats_.weak_ambiguous;
       continue;
     }
-    std::vector<std::pair<size_t, Pose2>> members;  // matcher() left this submap first in the cache
+    std::vector<std::pair<size_t, Pose2>> members;  // in the anchor's frame; matcher() left this submap first in the cache
     for (size_t i = 0; i < submaps_[s].keyframes.size(); ++i)
       members.emplace_back(submaps_[s].keyframes[i], cache_.front().relative[i]);
     ++stats_.matches;
@@ -214,9 +217,34 @@ void LoopCloser::search(std::vector<Keyframe>& keyframes, size_t query, Trajecto
       const double weak = std::pow(options_.loop_sigma_m / options_.ambiguous_sigma_along_m, 2);
       information.topLeftCorner<2, 2>() -= (1.0 - weak) / std::pow(options_.loop_sigma_m, 2) * along * along.transpose();
     }
-    pending_.push_back({{query, anchor, m->score, m->pose, std::move(members)}, information, keyframe_count_, false});
+    std::vector<Pending::Tie> ties = tiesOf(*m, members, anchor, sparse ? options_.sparse_loop_edge_keyframes : 0, information);
+    const Pose2 tie_in_anchor = m->pose * ties.front().relative.inverse();
+    for (auto& member : members) member.second = tie_in_anchor.inverse() * member.second;
+    pending_.push_back({{query, ties.front().keyframe, m->score, ties.front().relative, std::move(members)},
+                        std::move(ties), keyframe_count_, false});
   }
   stats_.search_s += secondsSince(t0);
+}
+
+std::vector<LoopCloser::Pending::Tie> LoopCloser::tiesOf(const SubmapMatch& match,
+                                                         const std::vector<std::pair<size_t, Pose2>>& members,
+                                                         size_t anchor, int count, const Eigen::Matrix3d& information) {
+  if (count <= 0) return {{anchor, match.pose, information}};
+  std::vector<std::pair<double, size_t>> nearest;
+  for (size_t i = 0; i < members.size(); ++i)
+    nearest.emplace_back((members[i].second.translation() - match.pose.translation()).squaredNorm(), i);
+  const size_t n = std::min(members.size(), static_cast<size_t>(count));
+  std::partial_sort(nearest.begin(), nearest.begin() + static_cast<std::ptrdiff_t>(n), nearest.end());
+  std::vector<Pending::Tie> ties;
+  for (size_t j = 0; j < n; ++j) {
+    const Pose2& member = members[nearest[j].second].second;
+    // The information is in the anchor's frame; each edge's residual is in its keyframe's.
+    Eigen::Matrix3d rotate = Eigen::Matrix3d::Identity();
+    rotate.topLeftCorner<2, 2>() = Eigen::Rotation2Dd(member.theta_rad).toRotationMatrix();
+    ties.push_back({members[nearest[j].second].first, member.inverse() * match.pose,
+                    rotate.transpose() * information * rotate / double(n)});
+  }
+  return ties;
 }
 
 const SubmapMatcher& LoopCloser::matcher(const std::vector<Keyframe>& keyframes, size_t submap) {
@@ -276,11 +304,14 @@ bool LoopCloser::optimize(std::vector<Keyframe>& keyframes) {
   ++stats_.optimizations;
   bool usable = graph_.optimize().usable;
   bool rejected = false;
-  for (size_t e : loop_edges_) {
-    if (!graph_.edgeEnabled(e)) continue;
-    const graph::Pose2d error = graph_.edgeError(e);
+  for (const std::vector<size_t>& edges : loop_edges_) {
+    if (!graph_.edgeEnabled(edges.front())) continue;
+    // A closure tied to several keyframes is off by its edges' mean error: a
+    // bent submap leaves each edge off, in different directions.
+    graph::Pose2d error = graph::Pose2d::Zero();
+    for (size_t e : edges) error += graph_.edgeError(e) / double(edges.size());
     if (error.head<2>().norm() > options_.max_loop_error_m || std::abs(error[2]) > options_.max_loop_error_rad) {
-      graph_.disableEdge(e);
+      for (size_t e : edges) graph_.disableEdge(e);
       ++stats_.rejected_after_optimization;
       rejected = true;
     }

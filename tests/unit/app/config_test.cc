@@ -376,6 +376,7 @@ slam2d:
     enabled: false
     min_score: 0.62
     sparse_min_score: 0.75
+    sparse_loop_edge_keyframes: 1
     ambiguous_min_score: 0.7
     min_match_points: 20
     max_window_m: 3
@@ -398,6 +399,7 @@ slam2d:
   EXPECT_FALSE(o.loop_closure.enabled);
   EXPECT_EQ(o.loop_closure.min_score, 0.62);
   EXPECT_EQ(o.loop_closure.sparse_min_score, 0.75);
+  EXPECT_EQ(o.loop_closure.sparse_loop_edge_keyframes, 1);
   EXPECT_EQ(o.loop_closure.ambiguous_min_score, 0.7);
   EXPECT_EQ(o.loop_closure.min_match_points, 20);
   EXPECT_EQ(o.loop_closure.max_window_m, 3.0);

@@ -195,6 +195,47 @@ TEST_F(SimulatedLoop, ScansWithTooFewPointsAndWeakAmbiguousMatchesCloseNothing) 
   EXPECT_EQ(few_points.accepted, 0u);
 }
 
+// A closure against a sparse submap (here every submap counts as sparse) is
+// tied to the submap's keyframes nearest the matched pose and reported against
+// the nearest; with sparse_loop_edge_keyframes 0, against the anchor (the
+// middle keyframe). Either way the reported relative pose is the true one.
+TEST_F(SimulatedLoop, SparseSubmapClosuresAreTiedWhereTheScanMatched) {
+  const std::vector<Pose2> truth = outAndAgain();
+  const auto closures = [&](int tied_keyframes) {
+    Slam2dOptions options;
+    options.loop_closure.sparse_keyframe_spacing_m = 0.0;
+    options.loop_closure.sparse_loop_edge_keyframes = tied_keyframes;
+    Slam2d slam = drive(options, truth, truth, 36);
+    EXPECT_LT(rmsError(slam.trajectory("robot"), truth), 0.06);
+    slam.confirmLoopClosures();
+    return slam.takeLoopClosures();
+  };
+  const auto scan = [](int64_t stamp_ns) { return size_t(stamp_ns / 100'000'000); };
+  for (const int tied : {0, 5}) {
+    SCOPED_TRACE(tied);
+    const std::vector<LoopClosure2d> found = closures(tied);
+    ASSERT_GE(found.size(), 3u);
+    size_t off_anchor = 0;
+    for (const LoopClosure2d& c : found) {
+      const Pose2 expected = between(truth[scan(c.match_stamp_ns)], truth[scan(c.query_stamp_ns)]);
+      EXPECT_LT((c.relative.translation() - expected.translation()).norm(), 0.1);
+      EXPECT_LT(std::abs(normalizeAngle(c.relative.theta_rad - expected.theta_rad)), 0.03);
+      ASSERT_FALSE(c.match_submap.empty());
+      const auto match = std::find_if(c.match_submap.begin(), c.match_submap.end(),
+                                      [&](const SubmapKeyframe& k) { return k.stamp_ns == c.match_stamp_ns; });
+      ASSERT_NE(match, c.match_submap.end()) << "the match is one of the submap's keyframes";
+      EXPECT_LT(match->relative.translation().norm() + std::abs(match->relative.theta_rad), 1e-9)
+          << "the submap is given in the match's frame";
+      const bool anchor = match == c.match_submap.begin() + ptrdiff_t(c.match_submap.size() / 2);
+      off_anchor += !anchor;
+      if (tied == 0) EXPECT_TRUE(anchor);
+      for (const SubmapKeyframe& k : c.match_submap)
+        if (tied > 0) EXPECT_LE(c.relative.translation().norm(), (c.relative.translation() - k.relative.translation()).norm() + 1e-9);
+    }
+    if (tied > 0) EXPECT_GT(off_anchor, 0u) << "every scan matched next to the anchor: the test shows nothing";
+  }
+}
+
 // The hold (confirm_after_s) only delays reports: the graph, and so the
 // trajectory, is the same, and every closure reported with it is one reported
 // without, at the same scan or later.
@@ -265,6 +306,7 @@ TEST(LoopClosureOptions, BadOptionsThrow) {
   throws([](LoopClosureOptions& o) { o.min_match_points = -1; });
   throws([](LoopClosureOptions& o) { o.sparse_keyframe_spacing_m = -0.1; });
   throws([](LoopClosureOptions& o) { o.sparse_raster_dilation_cells = -1; });
+  throws([](LoopClosureOptions& o) { o.sparse_loop_edge_keyframes = -1; });
   // Off, options are still checked: turning it on later must not be the first time they are.
   throws([](LoopClosureOptions& o) {
     o.enabled = false;
