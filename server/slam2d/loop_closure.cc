@@ -137,7 +137,7 @@ bool LoopCloser::addKeyframe(std::vector<Keyframe>& keyframes) {
     for (Pending& o : pending_) {
       // Support comes from another keyframe matched against another submap: consecutive
       // keyframes against one submap repeat the same aliasing (seen on raw fr079).
-      if (o.closure.query == p.closure.query || o.closure.match == p.closure.match || !agree(p, o)) continue;
+      if (o.closure.query == p.closure.query || o.submap == p.submap || !agree(p, o)) continue;
       p.supported = o.supported = true;
       large_correction = true;
     }
@@ -220,7 +220,7 @@ void LoopCloser::search(std::vector<Keyframe>& keyframes, size_t query, Trajecto
     std::vector<Pending::Tie> ties = tiesOf(*m, members, anchor, sparse ? options_.sparse_loop_edge_keyframes : 0, information);
     const Pose2 tie_in_anchor = m->pose * ties.front().relative.inverse();
     for (auto& member : members) member.second = tie_in_anchor.inverse() * member.second;
-    pending_.push_back({{query, ties.front().keyframe, m->score, ties.front().relative, std::move(members)},
+    pending_.push_back({{query, ties.front().keyframe, m->score, ties.front().relative, std::move(members)}, s,
                         std::move(ties), keyframe_count_, false});
   }
   stats_.search_s += secondsSince(t0);

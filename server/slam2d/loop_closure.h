@@ -100,8 +100,8 @@ struct LoopClosureOptions {
   /// edge to the anchor). A sparse submap spans 15–30 m of path rendered
   /// rigidly from the front end's poses; an edge to its anchor carries the
   /// submap's bend into the graph. From 10 starts of each corrected log, 5
-  /// against the anchor: closures judged false 32 → 5, ATE medians within
-  /// the starts' spread (belgioioso 0.105 → 0.091, csail 0.193 → 0.175,
+  /// against the anchor: closures judged false 32 → 4, ATE medians within
+  /// the starts' spread (belgioioso 0.105 → 0.091, csail 0.193 → 0.213,
   /// edmonton 0.902 → 0.932); 1 (the nearest alone) removed as many false
   /// closures but held the graph to one scan (csail 0.193 → 0.221, one start
   /// 4.7 m). On dense submaps (keyframes ≈ 0.2 m apart, bent little) the same
@@ -265,6 +265,7 @@ class LoopCloser {
   };
   struct Pending {
     Closure closure;
+    size_t submap = 0;  ///< the matched submap (closure.match need not be its anchor)
     /// The closure's graph edges: the submap keyframe each starts from, the
     /// query's matched pose in that keyframe's frame and the edge's information.
     struct Tie {
