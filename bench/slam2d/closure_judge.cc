@@ -101,8 +101,10 @@ struct PlanarAlignment {
   }
 };
 
-/// The judge's pose of a submap's anchor that best fits all its keyframes:
-/// a single bad reference pose (of the anchor itself, say) moves it little.
+/// The judge's pose of a closure's match keyframe (the submap's anchor, or for
+/// a sparse submap its keyframe nearest the match) that best fits all the
+/// submap's keyframes: a single bad reference pose (of that keyframe itself,
+/// say) moves it little.
 /// None when fewer than kMinSubmapKeyframes keyframes have a reference pose.
 std::optional<Pose2> submapAnchor(const slam2d::LoopClosure2d& c, std::optional<size_t> match,
                                   const std::function<std::optional<size_t>(int64_t)>& input_of, const JudgedRun& run,

@@ -184,7 +184,7 @@ struct LoopClosureOptions {
 /// A keyframe of a matched submap, as the submap was built.
 struct SubmapKeyframe {
   int64_t stamp_ns = 0;
-  Pose2 relative;  ///< in the frame of the submap's anchor (LoopClosure2d::match_pose)
+  Pose2 relative;  ///< in the frame of the closure's match keyframe (LoopClosure2d::match_pose)
 };
 
 /// One accepted geometric closure.
@@ -194,11 +194,13 @@ struct LoopClosure2d {
   Pose2 query_pose;       ///< the new scan's robot pose (corrected) when accepted
   std::string match_trajectory;
   int64_t match_stamp_ns = 0;
-  Pose2 match_pose;       ///< the older keyframe it closed on (corrected), the anchor of the matched submap
+  /// The older keyframe it closed on (corrected): the matched submap's anchor,
+  /// or for a sparse submap its keyframe nearest the matched pose.
+  Pose2 match_pose;
   double score = 0.0;     ///< correlative match score 0..1
-  Pose2 relative;         ///< the matched pose of the query in match_pose's frame (the loop edge's measurement)
+  Pose2 relative;         ///< the matched pose of the query in match_pose's frame (its loop edge's measurement)
   /// The submap the scan was matched against (match_trajectory's keyframes,
-  /// the anchor among them): a closure can be judged against it as a whole.
+  /// match_pose's among them): a closure can be judged against it as a whole.
   std::vector<SubmapKeyframe> match_submap;
 };
 
