@@ -19,6 +19,10 @@
 
 namespace rmap::testing {
 
+/// Timeout of test clients whose requests answer a whole map (tens of thousands of cuboids as
+/// JSON): a sanitized rmapd on a busy 2-core machine took over 10 s, the client's default.
+inline constexpr std::chrono::milliseconds kWholeMapRequestTimeout{60000};
+
 inline nlohmann::json getJson(client::HttpClient& http, const std::string& target, int expected_status = 200) {
   const client::HttpResponse r = http.get(target);
   EXPECT_EQ(r.status, expected_status) << target << ": " << r.body;

@@ -94,7 +94,7 @@ TEST_F(Export, OctomapReadsTheBtWithTheServersOccupancy) {
   ASSERT_EQ(run.exit_code, 0) << run.err;
   octomap::OcTree tree(0.1);
   ASSERT_TRUE(tree.readBinary(file.string())) << "liboctomap could not read the export";
-  client::HttpClient http(rmapd_->httpUrl());
+  client::HttpClient http(rmapd_->httpUrl(), {}, kWholeMapRequestTimeout);
   const nlohmann::json info = getJson(http, "/v1/maps/lab");
   EXPECT_DOUBLE_EQ(tree.getResolution(), info["resolution_m"].get<double>());
   // Cells the map knows add up to the tree's leaves.
@@ -139,7 +139,7 @@ TEST_F(Export, OctomapReadsTheBtWithTheServersOccupancy) {
 }
 
 TEST_F(Export, PlyHoldsOneVertexPerCuboidOrABoxPerCuboid) {
-  client::HttpClient http(rmapd_->httpUrl());
+  client::HttpClient http(rmapd_->httpUrl(), {}, kWholeMapRequestTimeout);
   const std::vector<nlohmann::json> cuboids = allCuboids(http, "lab");
   const long occupied = std::count_if(cuboids.begin(), cuboids.end(),
                                       [](const nlohmann::json& c) { return c["state"] == "occupied"; });

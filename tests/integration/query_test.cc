@@ -34,7 +34,7 @@ class Query : public ::testing::Test {
   static TempDir* dir_;
   static RmapdProcess* rmapd_;
   TempDir scratch_{"rmap-query-out"};
-  client::HttpClient http_{rmapd_->httpUrl()};
+  client::HttpClient http_{rmapd_->httpUrl(), {}, kWholeMapRequestTimeout};
 };
 
 TempDir* Query::dir_ = nullptr;
