@@ -47,6 +47,11 @@ void Slam2dOptions::validate() const {
   require(map_update_angle_rad >= 0.0 && std::isfinite(map_update_angle_rad), "map_update_angle_rad must be ≥ 0");
   require(range_min_m >= 0.0f && range_max_m > range_min_m && std::isfinite(range_max_m),
           "need 0 ≤ range_min_m < range_max_m < inf");
+  require(odometry_heading_kappa >= 0.0 && std::isfinite(odometry_heading_kappa) &&
+              max_odometry_information_theta >= 0.0 && std::isfinite(max_odometry_information_theta),
+          "odometry_heading_kappa and max_odometry_information_theta must be finite and >= 0");
+  require(heading_agreement_scans >= 5 && heading_agreement_scans <= 10000,
+          "heading_agreement_scans must be in [5, 10000]");
   require(odometry_information_xy >= 0.0 && odometry_information_theta >= 0.0 &&
               std::isfinite(odometry_information_xy) && std::isfinite(odometry_information_theta),
           "odometry information must be finite and ≥ 0");
@@ -70,6 +75,19 @@ void Slam2dOptions::validate() const {
           "matcher damping ≥ 0 and step bounds > 0");
   incidence.validate();  // else a bad option would only throw at the first scan with intensities
   loop_closure.validate();
+}
+
+double odometryHeadingInformation(const std::deque<double>& disagreement_rad, const Slam2dOptions& options) {
+  if (options.odometry_heading_kappa <= 0.0 ||
+      5 * disagreement_rad.size() < static_cast<size_t>(options.heading_agreement_scans))
+    return options.odometry_information_theta;
+  std::vector<double> sorted(disagreement_rad.begin(), disagreement_rad.end());
+  const auto middle = sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2);
+  std::nth_element(sorted.begin(), middle, sorted.end());
+  const double sigma_rad = 1.4826 * *middle;  // the standard deviation of normal noise with this median |error|
+  const double information = sigma_rad > 0.0 ? options.odometry_heading_kappa / (sigma_rad * sigma_rad)
+                                             : options.max_odometry_information_theta;
+  return std::max(options.odometry_information_theta, std::min(information, options.max_odometry_information_theta));
 }
 
 Slam2d::Slam2d(Slam2dOptions options)
@@ -193,10 +211,12 @@ Pose2 Slam2d::addScan(const std::string& trajectory, const LaserScan& scan, cons
   Pose2 estimate = predicted;
   const GridMap2d& match_map = is_new ? map_ : matchingMap(track.index);  // a joining robot locks onto the whole map
   if (!is_new && !points.empty() && !map_.empty()) {
+    const bool sparse_before = sparse(track);  // as of the scans before this one
     std::optional<PosePrior> prior;
     if (odometry_step)
       prior = PosePrior{predicted, {options_.odometry_information_xy, options_.odometry_information_xy,
-                                    options_.odometry_information_theta}};
+                                    sparse_before ? odometryHeadingInformation(track.heading_disagreement_rad, options_)
+                                                  : options_.odometry_information_theta}};
     ScanMatcherOptions matcher = options_.matcher;
     const Pose2 step = odometry_step ? between(*track.odometry, *odometry) : Pose2{};
     const bool search = !odometry_step || step.translation().norm() > options_.search_odometry_step_m ||
@@ -225,6 +245,11 @@ Pose2 Slam2d::addScan(const std::string& trajectory, const LaserScan& scan, cons
                                ? (1.0 - kResidualRate) * *track.match_residual + kResidualRate * match.mean_residual
                                : match.mean_residual;
     estimate = match.pose;
+    if (odometry_step && options_.odometry_heading_kappa > 0.0) {
+      std::deque<double>& disagreement = track.heading_disagreement_rad;
+      disagreement.push_back(std::abs(normalizeAngle(between(track.pose, estimate).theta_rad - step.theta_rad)));
+      if (disagreement.size() > static_cast<size_t>(options_.heading_agreement_scans)) disagreement.pop_front();
+    }
   } else if (is_new && !points.empty() && !map_.empty()) {
     // A robot joining a shared map starts where its odometry says, then locks on.
     estimate = matchScan(map_, points, predicted, std::nullopt, options_.matcher).pose;
@@ -237,7 +262,7 @@ Pose2 Slam2d::addScan(const std::string& trajectory, const LaserScan& scan, cons
     track.scan_motion_m =
         track.scan_motion_m ? (1.0 - kResidualRate) * *track.scan_motion_m + kResidualRate * motion : motion;
   }
-  const bool sparse = track.scan_motion_m && *track.scan_motion_m >= options_.sparse_scan_motion_m;
+  const bool sparse_track = sparse(track);
   const Pose2 moved = between(track.last_update_pose, estimate);
   const bool update = is_new || map_.empty() || moved.translation().norm() >= options_.map_update_distance_m ||
                       std::abs(moved.theta_rad) >= options_.map_update_angle_rad;
@@ -276,7 +301,7 @@ Pose2 Slam2d::addScan(const std::string& trajectory, const LaserScan& scan, cons
     }
     track.last_update_pose = estimate;
     ++version_;
-    if (options_.local_map_keyframes > 0 && sparse)
+    if (options_.local_map_keyframes > 0 && sparse_track)
       addToLocalMaps(kf, keyframes_.size(), calibration);
     else
       local_maps_[track.index].clear();

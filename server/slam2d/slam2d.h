@@ -121,6 +121,22 @@ struct Slam2dOptions {
   /// whole map first. local_map_keyframes 0: off.
   double sparse_scan_motion_m = 0.3;
   int local_map_keyframes = 70;
+  /// Sparse trajectories: a heading prior that follows how well the
+  /// odometry's headings agree with the matches. σ = 1.4826 · the median of
+  /// |matched − odometry| heading step (rad) over the trajectory's last
+  /// heading_agreement_scans odometry steps (at least a fifth of them); the
+  /// prior's θ information (as odometry_information_theta) is then
+  /// odometry_heading_kappa / σ², at most max_odometry_information_theta.
+  /// Wheel headings of sparse logs differ 5–15× in quality between robots
+  /// (docs/BENCHMARKS.md §4): a fixed weight helped those that turn little
+  /// and broke those that turn much. Corrected logs with loop closure, ATE
+  /// medians over 10 starts without → with: intel 0.092 → 0.080 (false
+  /// closures 3 → 0), edmonton 0.93 → 0.81, infinite-corridor 1.05 → 0.96,
+  /// campus 65 → 57, csail 0.213 → 0.210, belgioioso 0.091 → 0.098; 5 · 10⁻⁴
+  /// and 2 · 10⁻³ traded logs against each other. 0: off.
+  double odometry_heading_kappa = 1e-3;
+  double max_odometry_information_theta = 20.0;
+  int heading_agreement_scans = 50;
   OccupancyUpdate occupancy;             ///< log-odds of hits and misses, clamping
   ScanMatcherOptions matcher;            ///< iterations, damping, step bounds (reflectivity weight set from above)
   IncidenceOptions incidence;            ///< per-beam incidence for the calibration
@@ -138,6 +154,14 @@ struct Slam2dOptions {
   /// @throws std::invalid_argument naming the first bad option
   void validate() const;
 };
+
+/// θ information of a sparse trajectory's odometry prior, from how its
+/// odometry's heading steps agreed with the matches (see
+/// Slam2dOptions::odometry_heading_kappa); odometry_information_theta while
+/// fewer than a fifth of heading_agreement_scans steps were seen, and never less.
+/// @param disagreement_rad  |matched − odometry| heading step (rad) of the
+///                          trajectory's newest odometry steps
+double odometryHeadingInformation(const std::deque<double>& disagreement_rad, const Slam2dOptions& options);
 
 /// A scan's robot pose at its stamp.
 struct StampedPose2 {
@@ -207,6 +231,7 @@ class Slam2d {
     Pose2 last_update_pose;         ///< pose at the last map update
     std::optional<double> match_residual;  ///< running mean of the matches' mean residual (see relock_*)
     std::optional<double> scan_motion_m;   ///< running mean of the translation between scans (see sparse_scan_motion_m)
+    std::deque<double> heading_disagreement_rad;  ///< newest last: |matched − odometry| heading steps (see odometry_heading_kappa)
     size_t index = 0;                      ///< into names_ and scans_
     std::optional<size_t> keyframe;        ///< its newest keyframe
   };
@@ -230,6 +255,10 @@ class Slam2d {
     bool tried_full = false;                    ///< one attempt is made once the sample is full
   };
 
+  /// Whether `track`'s scans are sparse_scan_motion_m or more apart (running mean).
+  bool sparse(const Trajectory& track) const {
+    return track.scan_motion_m && *track.scan_motion_m >= options_.sparse_scan_motion_m;
+  }
   /// Self-calibrates `model` from its sample when ready; fuses the sample on success.
   void maybeSelfCalibrate(ScannerModel& model);
   /// After the graph moved keyframes: the map is rendered again from the first

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <deque>
 #include <map>
 #include <random>
 #include <vector>
@@ -282,6 +283,42 @@ TEST(Slam2d, RejectsBadOptions) {
   o = {};
   o.sparse_scan_motion_m = NAN;
   EXPECT_THROW(Slam2d{o}, std::invalid_argument);
+  o = {};
+  o.odometry_heading_kappa = -1e-3;
+  EXPECT_THROW(Slam2d{o}, std::invalid_argument);
+  o = {};
+  o.max_odometry_information_theta = INFINITY;
+  EXPECT_THROW(Slam2d{o}, std::invalid_argument);
+  o = {};
+  o.heading_agreement_scans = 4;
+  EXPECT_THROW(Slam2d{o}, std::invalid_argument);
+}
+
+TEST(Slam2d, OdometryHeadingPriorFollowsHowWellTheOdometryHeadingsAgree) {
+  Slam2dOptions o;
+  ASSERT_GT(o.odometry_heading_kappa, 0.0);
+  ASSERT_EQ(o.heading_agreement_scans, 50);
+  const auto disagreeing = [](size_t n, double rad) { return std::deque<double>(n, rad); };
+  // Too few steps seen (< a fifth of the window): the fixed weight.
+  EXPECT_EQ(odometryHeadingInformation(disagreeing(9, 0.01), o), o.odometry_information_theta);
+  // σ = 1.4826 · median: 0.01 rad → κ / σ²; ten times the disagreement, a hundredth of the weight.
+  const double sigma_rad = 1.4826 * 0.01;
+  EXPECT_NEAR(odometryHeadingInformation(disagreeing(10, 0.01), o), o.odometry_heading_kappa / (sigma_rad * sigma_rad),
+              1e-9);
+  EXPECT_NEAR(odometryHeadingInformation(disagreeing(50, 0.1), o),
+              odometryHeadingInformation(disagreeing(50, 0.01), o) / 100.0, 1e-9);
+  // The median: a minority of wild steps (slips, turns the wheels misread) does not count.
+  std::deque<double> mixed = disagreeing(30, 0.01);
+  mixed.insert(mixed.end(), 20, 1.0);
+  EXPECT_NEAR(odometryHeadingInformation(mixed, o), odometryHeadingInformation(disagreeing(50, 0.01), o), 1e-9);
+  // Headings that always agree: the cap, not infinity.
+  EXPECT_EQ(odometryHeadingInformation(disagreeing(50, 0.0), o), o.max_odometry_information_theta);
+  EXPECT_EQ(odometryHeadingInformation(disagreeing(50, 1e-6), o), o.max_odometry_information_theta);
+  // Never below the fixed weight; κ = 0 turns it off.
+  o.odometry_information_theta = 0.5;
+  EXPECT_EQ(odometryHeadingInformation(disagreeing(50, 0.5), o), 0.5);
+  o.odometry_heading_kappa = 0.0;
+  EXPECT_EQ(odometryHeadingInformation(disagreeing(50, 0.0), o), 0.5);
 }
 
 }  // namespace
