@@ -97,8 +97,9 @@ TEST(StoreCrash, EveryAcknowledgedMessageSurvivesKill9) {
 
   std::vector<Ack> acks;
   std::string partial;
+  // One read may bring more acks than wanted (the writer runs on meanwhile): at least 400.
   readAcks(fds[0], acks, partial, 400);
-  ASSERT_EQ(acks.size(), 400u) << "the writer stopped early";
+  ASSERT_GE(acks.size(), 400u) << "the writer stopped early";
   kill(child, SIGKILL);
   int status = 0;
   ASSERT_EQ(waitpid(child, &status, 0), child);
