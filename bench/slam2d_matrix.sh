@@ -12,7 +12,8 @@
 # corrected logs of the same run where they exist (--closure-reference; the
 # table gives the first one's count of false closures, judged against the
 # anchor's pose and against the submap as a whole, and, with two, the count
-# both call false), else against the reference poses. REPEAT=N runs each corrected
+# both call false), else against the reference poses; where the log has
+# relations, also the count they call false (chained from match to query). REPEAT=N runs each corrected
 # log with loop closure from N starts (--repeat: the logged one and N − 1 seeded
 # rigid moves of the whole run); the last column gives the median ATE over them.
 set -euo pipefail
@@ -117,7 +118,7 @@ done
     jq -r --arg name "$name" '
       def f(d): if . == null then "–" else (. * pow(10; d) | round / pow(10; d) | tostring) end;
       def pm(x; d): if x.mean == null then "–" else "\(x.mean | f(d)) ± \(x.std | f(d))" end;
-      "| \($name) | \(.scans) | \(.odometry) | \(.relations_used) | \(pm(.rel_trans_err_m; 4)) | \(pm(.rel_rot_err_deg; 3)) | \(pm(.reference_rel_trans_err_m; 4)) | \(.ate_vs_reference_m | f(3)) | \(.rpe_1m_m | f(4)) | \(.realtime_factor | f(0)) | \(.cpu_s | f(2)) | \(.ate_vs_truth_m | f(4)) | \(.reflectivity_rel_err_median | f(3)) | \(if .reflectivity_spread_raw == null then "–" else "\(.reflectivity_spread_raw | f(3)) → \(.reflectivity_spread_calibrated | f(3))" end) | \(if .loop_closure == null then "–" else "\(.loop_closure.closures) (\(.loop_closure.closures_judged), \(.loop_closure.false_closures // "–")\(if .loop_closure.false_against_submap == null then "" else "; against the submap \(.loop_closure.false_against_submap)" end)\(if .loop_closure.false_by_all_judges == null then "" else "; by every judge \(.loop_closure.false_by_all_judges)" end))" end) | \(.loop_closure.optimization_s | f(2)) | \(if .repeated == null then "–" else "\(.repeated.ate_m_median | f(3)) (\(.repeated.ate_m_min | f(3))–\(.repeated.ate_m_max | f(3))), \(.repeated.runs | length) starts" end) |"
+      "| \($name) | \(.scans) | \(.odometry) | \(.relations_used) | \(pm(.rel_trans_err_m; 4)) | \(pm(.rel_rot_err_deg; 3)) | \(pm(.reference_rel_trans_err_m; 4)) | \(.ate_vs_reference_m | f(3)) | \(.rpe_1m_m | f(4)) | \(.realtime_factor | f(0)) | \(.cpu_s | f(2)) | \(.ate_vs_truth_m | f(4)) | \(.reflectivity_rel_err_median | f(3)) | \(if .reflectivity_spread_raw == null then "–" else "\(.reflectivity_spread_raw | f(3)) → \(.reflectivity_spread_calibrated | f(3))" end) | \(if .loop_closure == null then "–" else "\(.loop_closure.closures) (\(.loop_closure.closures_judged), \(.loop_closure.false_closures // "–")\(if .loop_closure.false_against_submap == null then "" else "; against the submap \(.loop_closure.false_against_submap)" end)\(if .loop_closure.false_by_all_judges == null then "" else "; by every judge \(.loop_closure.false_by_all_judges)" end)\(if .loop_closure.false_by_relations == null then "" else "; by the relations \(.loop_closure.false_by_relations) of \(.loop_closure.closures_judged_by_relations)" end))" end) | \(.loop_closure.optimization_s | f(2)) | \(if .repeated == null then "–" else "\(.repeated.ate_m_median | f(3)) (\(.repeated.ate_m_min | f(3))–\(.repeated.ate_m_max | f(3))), \(.repeated.runs | length) starts" end) |"
     ' "$out/$name.json"
   done
 } | tee "$out/table.md"

@@ -9,6 +9,8 @@
 
 #include <Eigen/Geometry>
 
+#include "slam2d/relation_chain.h"
+
 namespace rmap::bench {
 
 using json = nlohmann::json;
@@ -151,6 +153,9 @@ json judgeClosures(const std::vector<slam2d::LoopClosure2d>& closures,
   std::vector<size_t> judged_submap(judges.size(), 0), wrong_submap(judges.size(), 0);
   std::vector<double> worst_m(judges.size(), 0.0);
   size_t cross = 0, judged_by_all = 0, wrong_by_all = 0;
+  const RelationChain chain(relations, run.stamps_ns);
+  size_t judged_by_relations = 0, wrong_by_relations = 0;
+  double worst_by_relations_m = 0.0;
   json list = json::array();
   for (const slam2d::LoopClosure2d& c : closures) {
     cross += c.query_trajectory != c.match_trajectory;
@@ -193,6 +198,21 @@ json judgeClosures(const std::vector<slam2d::LoopClosure2d>& closures,
       by_judge.push_back(std::move(verdict));
     }
     if (!judges.empty() && !by_judge.front().is_null()) item.update(by_judge.front());
+    if (const std::optional<RelationChain::Chained> truth =
+            query && match ? chain.motion(*match, *query, run.laser_poses) : std::nullopt) {
+      const Pose2 e = between(truth->motion, measured);
+      const bool is_wrong = e.translation().norm() > ClosureJudge::kMaxError_m ||
+                            std::abs(e.theta_rad) > ClosureJudge::kMaxError_rad;
+      ++judged_by_relations;
+      wrong_by_relations += is_wrong;
+      worst_by_relations_m = std::max(worst_by_relations_m, e.translation().norm());
+      item["by_relations"] = {{"error_m", e.translation().norm()},
+                              {"error_deg", std::abs(e.theta_rad) * 180.0 / std::numbers::pi},
+                              {"false", is_wrong},
+                              {"relations", truth->relations},
+                              {"bridge_scans", truth->bridge_scans},
+                              {"bridge_m", truth->bridge_m}};
+    }
     if (judges.size() > 1) {
       item["by_judge"] = by_judge;
       if (judged_here == judges.size()) {
@@ -226,6 +246,9 @@ json judgeClosures(const std::vector<slam2d::LoopClosure2d>& closures,
           {"judged_by", judges.empty() ? json(nullptr) : json(judges.front().judged_by)},
           {"judge_poses_contradicted", judges.empty() ? json(nullptr) : json(contradicted.front())},
           {"judges", per_judge},
+          {"closures_judged_by_relations", judged_by_relations},
+          {"false_by_relations", chain.empty() ? json(nullptr) : json(wrong_by_relations)},
+          {"worst_error_by_relations_m", judged_by_relations > 0 ? json(worst_by_relations_m) : json(nullptr)},
           {"closures_judged_by_all", several ? json(judged_by_all) : json(nullptr)},
           {"false_by_all_judges", several ? json(wrong_by_all) : json(nullptr)},
           {"list", list}};

@@ -92,7 +92,12 @@ size_t markContradictedPoses(ClosureJudge& judge, const std::vector<datasets::Sl
 ///         judge's pose — and, with two judges or more, by_judge);
 ///         with `relations`, each judge judges without the poses they
 ///         contradict (markContradictedPoses): judge_poses_contradicted, the
-///         first judge's, and each judge's in judges
+///         first judge's, and each judge's in judges; and the relations judge
+///         too, chained from the match to the query (RelationChain), with the
+///         same bounds: closures_judged_by_relations, false_by_relations (null
+///         when no relation names two scans of the run),
+///         worst_error_by_relations_m, and by_relations in the list (error_m,
+///         error_deg, false, relations chained, bridge_scans, bridge_m)
 nlohmann::json judgeClosures(const std::vector<slam2d::LoopClosure2d>& closures,
                              const std::vector<slam2d::LoopClosure2d>& withdrawn, const JudgedRun& run,
                              std::vector<ClosureJudge> judges,

@@ -234,11 +234,13 @@ std::vector<Slam2dInput> startedAt(const std::vector<Slam2dInput>& inputs, const
 
 /// The closure counts each run of --repeat reports (keys of judgeClosures' JSON).
 constexpr const char* kRunClosureKeys[] = {"closures", "closures_judged", "false_closures", "false_against_submap",
-                                           "false_by_all_judges"};
+                                           "false_by_all_judges", "closures_judged_by_relations",
+                                           "false_by_relations"};
 
 /// Runs 2..n of --repeat: the run from n − 1 other starts (seeded, so reproducible), each
 /// scored as the headline run is. @return JSON: runs [{start, ate_m, rpe_1m_m, rel_trans_err_m,
-/// closures, closures_judged, false_closures, false_against_submap, false_by_all_judges, cpu_s}] (the first
+/// closures, closures_judged, false_closures, false_against_submap, false_by_all_judges,
+/// closures_judged_by_relations, false_by_relations, cpu_s}] (the first
 /// is `first_run`) and the median, min and max of ATE over all n runs
 json repeatedRuns(const Slam2dBenchOptions& options, const Slam2dDataset& data, const std::vector<ClosureJudge>& judges,
                   const json& first_run) {
@@ -275,6 +277,9 @@ json repeatedRuns(const Slam2dBenchOptions& options, const Slam2dDataset& data, 
                     one["false_by_all_judges"].is_null()
                         ? ""
                         : (", " + std::to_string(one["false_by_all_judges"].get<size_t>()) + " by every judge").c_str());
+      if (!one["false_by_relations"].is_null())
+        std::printf("; by the relations %zu of %zu false", one["false_by_relations"].get<size_t>(),
+                    one["closures_judged_by_relations"].get<size_t>());
     }
     std::printf(", %.1f s CPU\n", run.cpu_s);
     runs.push_back(std::move(one));
@@ -418,6 +423,11 @@ int runSlam2dBench(const Slam2dBenchOptions& options) {
                   j["worst_closure_error_m"].is_null() ? 0.0 : j["worst_closure_error_m"].get<double>(),
                   j["false_against_submap"].get<size_t>(), j["closures_judged_against_submap"].get<size_t>());
     }
+    if (!lc_json["false_by_relations"].is_null())
+      std::printf("  %zu judged by the relations chained from match to query: %zu false, worst %.3f m\n",
+                  lc_json["closures_judged_by_relations"].get<size_t>(), lc_json["false_by_relations"].get<size_t>(),
+                  lc_json["worst_error_by_relations_m"].is_null() ? 0.0
+                                                                  : lc_json["worst_error_by_relations_m"].get<double>());
     if (judges.size() > 1) {
       std::printf("  false by every judge: %zu of the %zu closures all judged\n",
                   lc_json["false_by_all_judges"].get<size_t>(), lc_json["closures_judged_by_all"].get<size_t>());

@@ -212,6 +212,40 @@ TEST(ClosureJudge, APoseTheRelationsContradictJudgesNothing) {
   EXPECT_TRUE(marked.referenceOf(4, run.judged.laser_poses).has_value());
 }
 
+// The relations judge on their own, chained from the match to the query
+// (RelationChain), with the bounds a judge's poses have.
+TEST(ClosureJudge, TheRelationsJudgeTheClosuresTheyChainTo) {
+  const TenScanRun run;
+  const std::vector<slam2d::LoopClosure2d> closures = {
+      run.closure(8, 2), run.closure(7, 1, {0.0, 0.35, 0.0}), run.closure(9, 3, {0.0, 0.0, 6.0 * kDeg})};
+  nlohmann::json r = judgeClosures(closures, {}, run.judged, {run.truthJudge("truth")});
+  EXPECT_TRUE(r["false_by_relations"].is_null()) << "no relations";
+  EXPECT_EQ(r["closures_judged_by_relations"], 0);
+  EXPECT_FALSE(r["list"][0].contains("by_relations"));
+
+  std::vector<datasets::SlamRelation> relations;
+  for (size_t i = 0; i + 1 < 10; ++i)
+    relations.push_back({run.judged.stamps_ns[i], run.judged.stamps_ns[i + 1],
+                         between(run.judged.laser_poses[i], run.judged.laser_poses[i + 1]), 0});
+  r = judgeClosures(closures, {}, run.judged, {run.truthJudge("truth")}, relations);
+  EXPECT_EQ(r["closures_judged_by_relations"], 3);
+  EXPECT_EQ(r["false_by_relations"], 2);
+  const nlohmann::json& list = r["list"];
+  for (size_t k = 0; k < 3; ++k) {
+    EXPECT_NEAR(list[k]["by_relations"]["error_m"].get<double>(), list[k]["error_m"].get<double>(), 1e-9);
+    EXPECT_NEAR(list[k]["by_relations"]["error_deg"].get<double>(), list[k]["error_deg"].get<double>(), 1e-6);
+    EXPECT_EQ(list[k]["by_relations"]["false"], list[k]["false"]);
+    EXPECT_EQ(list[k]["by_relations"]["bridge_scans"], 0);
+  }
+  EXPECT_EQ(list[0]["by_relations"]["relations"], 6);
+  EXPECT_NEAR(r["worst_error_by_relations_m"].get<double>(), list[1]["error_m"].get<double>(), 1e-9);
+
+  // Without a corrected log the relations still judge.
+  r = judgeClosures(closures, {}, run.judged, {}, relations);
+  EXPECT_TRUE(r["false_closures"].is_null());
+  EXPECT_EQ(r["false_by_relations"], 2);
+}
+
 TEST(ClosureJudge, ScansSharingAStampAreNotJudged) {
   TenScanRun run;
   run.judged.stamps_ns[2] = run.judged.stamps_ns[3];  // a log with rounded stamps
