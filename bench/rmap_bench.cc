@@ -148,6 +148,8 @@ int main(int argc, char** argv) {
   d->add_option("--sparse-loop-edges", slam2d.slam.loop_closure.sparse_loop_edge_keyframes,
                 "keyframes nearest the match a closure against a sparse submap is tied to (0: its anchor)");
   d->add_option("--loop-min-score", slam2d.slam.loop_closure.min_score, "correlative score a loop closure needs");
+  d->add_option("--max-loop-window-m", slam2d.slam.loop_closure.max_window_m,
+                "cap of the loop-closure search window's half-width, metres");
   d->add_option("--loop-ambiguity-margin", slam2d.slam.loop_closure.submap.ambiguity_margin,
                 "a loop match is ambiguous when a pose away from it scores within this margin (0: no check)");
   d->add_option("--loop-ambiguous-min-score", slam2d.slam.loop_closure.ambiguous_min_score,
