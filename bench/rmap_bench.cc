@@ -150,6 +150,12 @@ int main(int argc, char** argv) {
   d->add_option("--loop-min-score", slam2d.slam.loop_closure.min_score, "correlative score a loop closure needs");
   d->add_option("--max-loop-window-m", slam2d.slam.loop_closure.max_window_m,
                 "cap of the loop-closure search window's half-width, metres");
+  d->add_option("--max-loop-window-rad", slam2d.slam.loop_closure.max_window_rad,
+                "cap of the loop-closure search window's half-width in heading, radians");
+  d->add_option("--loop-support-separation", slam2d.slam.loop_closure.support_min_separation_m,
+                "two loop closures support each other only when their queries are this far apart along the path (m)");
+  d->add_option("--max-loop-error-m", slam2d.slam.loop_closure.max_loop_error_m,
+                "a loop edge still off by more than this (m) after an optimisation is disabled");
   d->add_option("--loop-ambiguity-margin", slam2d.slam.loop_closure.submap.ambiguity_margin,
                 "a loop match is ambiguous when a pose away from it scores within this margin (0: no check)");
   d->add_option("--loop-ambiguous-min-score", slam2d.slam.loop_closure.ambiguous_min_score,

@@ -53,6 +53,7 @@ void LoopClosureOptions::validate() const {
   requireLoopOption(nonNegative(small_correction_m) && nonNegative(small_correction_rad), "small_correction_* must be ≥ 0");
   requireLoopOption(support_keyframes >= 0, "support_keyframes must be ≥ 0");
   requireLoopOption(nonNegative(support_tolerance_m) && nonNegative(support_tolerance_rad), "support_tolerance_* must be ≥ 0");
+  requireLoopOption(nonNegative(support_min_separation_m), "support_min_separation_m must be ≥ 0");
   requireLoopOption(optimize_every_keyframes >= 1, "optimize_every_keyframes must be ≥ 1");
   requireLoopOption(positive(sequential_sigma_m) && positive(sequential_sigma_rad) && positive(loop_sigma_m) &&
                         positive(loop_sigma_rad) && nonNegative(sequential_sigma_m_per_m) &&
@@ -135,9 +136,7 @@ bool LoopCloser::addKeyframe(std::vector<Keyframe>& keyframes) {
       continue;
     }
     for (Pending& o : pending_) {
-      // Support comes from another keyframe matched against another submap: consecutive
-      // keyframes against one submap repeat the same aliasing (seen on raw fr079).
-      if (o.closure.query == p.closure.query || o.submap == p.submap || !agree(p, o)) continue;
+      if (!independentViews(p, o, keyframes) || !agree(p, o)) continue;
       p.supported = o.supported = true;
       large_correction = true;
     }
@@ -221,7 +220,7 @@ void LoopCloser::search(std::vector<Keyframe>& keyframes, size_t query, Trajecto
     const Pose2 tie_in_anchor = m->pose * ties.front().relative.inverse();
     for (auto& member : members) member.second = tie_in_anchor.inverse() * member.second;
     pending_.push_back({{query, ties.front().keyframe, m->score, ties.front().relative, std::move(members)}, s,
-                        std::move(ties), keyframe_count_, false});
+                        std::move(ties), keyframe_count_, trajectory.travel_m, false});
   }
   stats_.search_s += secondsSince(t0);
 }
@@ -296,6 +295,16 @@ bool LoopCloser::agree(const Pending& a, const Pending& b) const {
   const Eigen::Vector2d p = graphPose(b.closure.query).translation();
   return (ca * p - cb * p).norm() <= options_.support_tolerance_m &&
          std::abs(normalizeAngle(ca.theta_rad - cb.theta_rad)) <= options_.support_tolerance_rad;
+}
+
+bool LoopCloser::independentViews(const Pending& a, const Pending& b, const std::vector<Keyframe>& keyframes) const {
+  // Consecutive keyframes against one submap repeat one aliasing (seen on raw
+  // fr079); on a dense trajectory so do queries a few scans apart against
+  // neighbouring submaps (raw intel).
+  if (a.closure.query == b.closure.query || a.submap == b.submap) return false;
+  const size_t t = keyframes[a.closure.query].trajectory;
+  if (t != keyframes[b.closure.query].trajectory || trajectories_[t].sparse(options_.sparse_keyframe_spacing_m)) return true;
+  return std::abs(a.query_travel_m - b.query_travel_m) >= options_.support_min_separation_m;
 }
 
 bool LoopCloser::optimize(std::vector<Keyframe>& keyframes) {

@@ -20,18 +20,18 @@
 /// Verification, because one false closure bends the whole map:
 ///  1. score threshold and a refinement that stays in the found basin;
 ///  2. a closure whose correction of the current estimate is large (beyond
-///     small_correction_m / _rad) needs support: a closure of another
-///     keyframe against another submap implying the same correction, within
-///     support_keyframes;
-///     unsupported ones are dropped;
+///     small_correction_m / _rad) needs support: a closure of another view
+///     (on a dense trajectory a keyframe support_min_separation_m or more
+///     along the path away) against another submap implying the same
+///     correction, within support_keyframes; unsupported ones are dropped;
 ///  3. an ambiguous match (another pose of the submap fits nearly as well: a
 ///     corridor, repeated structure; see SubmapMatcherOptions::ambiguity_*)
 ///     constrains the graph only weakly (ambiguous_sigma_along_m) along the
 ///     direction of its rival: across a corridor it holds, along it the rest
 ///     of the graph decides, and a match that slid along it is left off by
 ///     more than max_loop_error_m after optimisation (check 4); against a
-///     dense submap it needs ambiguous_min_score, and a scan with fewer than
-///     min_match_points points does not search at all;
+///     dense submap it is dropped (ambiguous_min_score), and a scan with
+///     fewer than min_match_points points does not search at all;
 ///  4. loop edges carry a Huber loss, and after each optimisation a loop edge
 ///     still off by more than max_loop_error_m / _rad is disabled and the
 ///     graph optimised again. A closure the optimisation after it kept is
@@ -112,15 +112,16 @@ struct LoopClosureOptions {
   /// made raw intel worse (relation error 0.016 → 0.018, 8 false closures
   /// from 5 starts against 0), so they keep the anchor.
   int sparse_loop_edge_keyframes = 5;
-  /// Correlative score an ambiguous match against a dense submap needs (a
-  /// rival nearly as good, both of them poor: the scan fits two places about
-  /// equally badly). From 10 starts each, with min_match_points and
-  /// confirm_after_s = 15: raw intel's closures judged false 22 in 7 starts
-  /// → 2 in 1, raw fr079's 0 → 1 (5.1° off, the judge's bound is 5°), the
-  /// relation errors unchanged; 9 % fewer closures on intel, 2 % on fr079,
-  /// 23 % on mit-killian, which still closes its corridor loops. Sparse
-  /// submaps need sparse_min_score anyway.
-  double ambiguous_min_score = 0.68;
+  /// Correlative score an ambiguous match against a dense submap needs; at 1
+  /// none is kept. A dense submap's rival is a slide along a corridor the
+  /// match cannot fix, and a closure weakened along it (ambiguous_sigma_along_m)
+  /// adds little: at 0.68, raw intel from 10 starts had 5 closures 0.30–0.55 m
+  /// off by the relations, each an ambiguous match slid along its corridor.
+  /// Dropping them (with support_min_separation_m) left raw intel no false
+  /// closure by either judge, its relation error 0.0161 → 0.0157 m, 3 % fewer
+  /// closures, mit-killian 971 → 884, still closing its corridor loops
+  /// (BENCHMARKS.md §4). Sparse submaps need sparse_min_score anyway.
+  double ambiguous_min_score = 1.0;
   /// Match points (match_point_spacing_m apart) a keyframe needs to search:
   /// fewer cover under 4 m of wall, too little to fix a heading against an
   /// older submap (raw intel's false closures 5–8° off came from 31–34 points;
@@ -131,6 +132,14 @@ struct LoopClosureOptions {
   int support_keyframes = 10;       ///< keyframes an unsupported closure waits for support
   double support_tolerance_m = 0.15;   ///< two closures agree when their corrections differ by less
   double support_tolerance_rad = 0.05;
+  /// On a dense trajectory (keyframes closer than sparse_keyframe_spacing_m
+  /// on average) a closure supports another only when their query keyframes
+  /// lie this far apart along the path (m): scans 0.4 m apart see the same
+  /// walls and repeat the same false match (raw intel: four closures 0.35 m
+  /// off, from queries 0.4–0.9 m apart, supported each other). A sparse
+  /// trajectory's keyframes are views of their own (there, 1.5 m cost
+  /// belgioioso 0.098 → 0.123 m ATE).
+  double support_min_separation_m = 1.5;
   int optimize_every_keyframes = 20;
   /// Standard deviations of the edges: between consecutive keyframes (the
   /// front end's relative pose; its error grows with the step, so a jump
@@ -251,14 +260,16 @@ class LoopCloser {
   const LoopClosureOptions& options() const { return options_; }
 
  private:
+  /// Keyframes `count` of them along `travel_m` of path lie spacing_m or more apart on average.
+  static bool spacedAtLeast(double travel_m, uint64_t count, double spacing_m) {
+    return count > 1 && travel_m >= spacing_m * double(count - 1);
+  }
   struct SubmapInfo {
     size_t trajectory = 0;
     std::vector<size_t> keyframes;
     bool finished = false;
     double first_travel_m = 0.0, last_travel_m = 0.0;  ///< the trajectory's travel at its first and last keyframe
-    bool sparse(double spacing_m) const {
-      return keyframes.size() > 1 && last_travel_m - first_travel_m >= spacing_m * double(keyframes.size() - 1);
-    }
+    bool sparse(double spacing_m) const { return spacedAtLeast(last_travel_m - first_travel_m, keyframes.size(), spacing_m); }
     size_t anchor() const { return keyframes[keyframes.size() / 2]; }
   };
   struct TrajectoryState {
@@ -268,6 +279,7 @@ class LoopCloser {
     double travel_since_closure_m = 0.0;
     double travel_m = 0.0;
     uint64_t keyframes = 0;
+    bool sparse(double spacing_m) const { return spacedAtLeast(travel_m, keyframes, spacing_m); }
   };
   struct Pending {
     Closure closure;
@@ -281,6 +293,7 @@ class LoopCloser {
     };
     std::vector<Tie> ties;
     uint64_t added_at = 0;  ///< keyframe count when found
+    double query_travel_m = 0.0;  ///< its trajectory's travel at the query keyframe
     bool supported = false;
   };
 
@@ -295,6 +308,9 @@ class LoopCloser {
   /// The map-frame motion that moves the query keyframe where the closure says it is.
   Pose2 correction(const Pending& pending) const;
   bool agree(const Pending& a, const Pending& b) const;
+  /// Whether two closures are independent enough to support each other: other
+  /// queries, other submaps and, on a dense trajectory, support_min_separation_m apart.
+  bool independentViews(const Pending& a, const Pending& b, const std::vector<Keyframe>& keyframes) const;
   bool small(const Pose2& correction, const Pose2& at) const;
   bool optimize(std::vector<Keyframe>& keyframes);
   Pose2 graphPose(size_t node) const;

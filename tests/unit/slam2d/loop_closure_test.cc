@@ -120,6 +120,9 @@ TEST_F(SimulatedLoop, ClosesBetweenTwoTrajectories) {
     slam.addScan("b", testing::simScan(*world_, b[k], model, rng, int64_t(1000 + k) * 100'000'000), offset * b[k]);
     for (LoopClosure2d& c : slam.takeLoopClosures()) closures.push_back(c);
   }
+  // b's run (4 s) ends before the hold (confirm_after_s) would report a closure that no later optimisation tested.
+  slam.confirmLoopClosures();
+  for (LoopClosure2d& c : slam.takeLoopClosures()) closures.push_back(c);
   size_t cross = 0;
   for (const LoopClosure2d& c : closures) cross += c.query_trajectory == "b" && c.match_trajectory == "a";
   EXPECT_GT(cross, 0u);
@@ -287,6 +290,32 @@ TEST_F(SimulatedLoop, HoldingClosuresDelaysTheirReportsOnly) {
   EXPECT_GT(later, 0u) << "the hold held nothing back";
 }
 
+// A large correction needs support from another view: on a dense trajectory
+// a closure of a query nearer than support_min_separation_m along the path is
+// none; on a sparse one every keyframe is a view of its own. (Every closure
+// here needs support: no correction counts as small.)
+TEST_F(SimulatedLoop, SupportComesFromAnotherView) {
+  const std::vector<Pose2> truth = outAndAgain();
+  const auto stats = [&](double separation_m, double sparse_spacing_m) {
+    Slam2dOptions options;
+    options.loop_closure.small_correction_m = 0.0;
+    options.loop_closure.small_correction_rad = 0.0;
+    options.loop_closure.support_min_separation_m = separation_m;
+    options.loop_closure.sparse_keyframe_spacing_m = sparse_spacing_m;
+    Slam2d slam = drive(options, truth, truth, 37);
+    slam.confirmLoopClosures();
+    return *slam.loopClosureStats();
+  };
+  const double dense = 100.0;  // keyframe spacing no trajectory reaches
+  const LoopClosureStats near = stats(0.0, dense);
+  EXPECT_GT(near.accepted, 0u);
+  const LoopClosureStats apart = stats(1'000.0, dense);
+  EXPECT_EQ(apart.accepted, 0u) << "no two queries lie 1 km apart";
+  EXPECT_GT(apart.unsupported, 0u);
+  const LoopClosureStats sparse = stats(1'000.0, 0.0);
+  EXPECT_GT(sparse.accepted, 0u) << "a sparse trajectory's keyframes support each other at any separation";
+}
+
 TEST(LoopClosureOptions, BadOptionsThrow) {
   const auto throws = [](auto change) {
     Slam2dOptions options;
@@ -314,6 +343,7 @@ TEST(LoopClosureOptions, BadOptionsThrow) {
   throws([](LoopClosureOptions& o) { o.sparse_keyframe_spacing_m = -0.1; });
   throws([](LoopClosureOptions& o) { o.sparse_raster_dilation_cells = -1; });
   throws([](LoopClosureOptions& o) { o.sparse_loop_edge_keyframes = -1; });
+  throws([](LoopClosureOptions& o) { o.support_min_separation_m = -1.0; });
   // Off, options are still checked: turning it on later must not be the first time they are.
   throws([](LoopClosureOptions& o) {
     o.enabled = false;
