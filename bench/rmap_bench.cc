@@ -154,6 +154,8 @@ int main(int argc, char** argv) {
                 "cap of the loop-closure search window's half-width in heading, radians");
   d->add_option("--loop-support-separation", slam2d.slam.loop_closure.support_min_separation_m,
                 "two loop closures support each other only when their queries are this far apart along the path (m)");
+  d->add_option("--loop-support-keyframes", slam2d.slam.loop_closure.support_keyframes,
+                "keyframes a loop closure that needs support waits for it");
   d->add_option("--max-loop-error-m", slam2d.slam.loop_closure.max_loop_error_m,
                 "a loop edge still off by more than this (m) after an optimisation is disabled");
   d->add_option("--loop-ambiguity-margin", slam2d.slam.loop_closure.submap.ambiguity_margin,

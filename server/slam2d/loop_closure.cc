@@ -151,7 +151,7 @@ bool LoopCloser::addKeyframe(std::vector<Keyframe>& keyframes) {
       loop_edges_.push_back(std::move(edges));
       awaiting_ = true;
       trajectories_[keyframes[p.closure.query].trajectory].travel_since_closure_m = 0.0;
-    } else if (keyframe_count_ - p.added_at <= static_cast<uint64_t>(options_.support_keyframes)) {
+    } else if (awaitsSupport(p, keyframes)) {
       still.push_back(p);
     } else {
       ++stats_.unsupported;
@@ -305,6 +305,17 @@ bool LoopCloser::independentViews(const Pending& a, const Pending& b, const std:
   const size_t t = keyframes[a.closure.query].trajectory;
   if (t != keyframes[b.closure.query].trajectory || trajectories_[t].sparse(options_.sparse_keyframe_spacing_m)) return true;
   return std::abs(a.query_travel_m - b.query_travel_m) >= options_.support_min_separation_m;
+}
+
+bool LoopCloser::awaitsSupport(const Pending& p, const std::vector<Keyframe>& keyframes) const {
+  const uint64_t waited = keyframe_count_ - p.added_at;
+  if (waited <= static_cast<uint64_t>(options_.support_keyframes)) return true;
+  // On a dense trajectory the supporting view lies support_min_separation_m
+  // on: wait for twice that much travel (bounded: turning on the spot makes
+  // keyframes without travel).
+  const TrajectoryState& t = trajectories_[keyframes[p.closure.query].trajectory];
+  return !t.sparse(options_.sparse_keyframe_spacing_m) && t.travel_m - p.query_travel_m < 2.0 * options_.support_min_separation_m &&
+         waited <= 4 * static_cast<uint64_t>(options_.support_keyframes);
 }
 
 bool LoopCloser::optimize(std::vector<Keyframe>& keyframes) {
