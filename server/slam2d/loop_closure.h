@@ -118,8 +118,8 @@ struct LoopClosureOptions {
   /// adds little: at 0.68, raw intel from 10 starts had 5 closures 0.30–0.55 m
   /// off by the relations, each an ambiguous match slid along its corridor.
   /// Dropping them (with support_min_separation_m) left raw intel no false
-  /// closure by either judge, its relation error 0.0161 → 0.0157 m, 3 % fewer
-  /// closures, mit-killian 971 → 884, still closing its corridor loops
+  /// closure by either judge, its relation error 0.0161 → 0.0158 m, 3 % fewer
+  /// closures, mit-killian 971 → 970, still closing its corridor loops
   /// (BENCHMARKS.md §4). Sparse submaps need sparse_min_score anyway.
   double ambiguous_min_score = 1.0;
   /// Match points (match_point_spacing_m apart) a keyframe needs to search:
