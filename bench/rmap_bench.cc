@@ -119,6 +119,12 @@ int main(int argc, char** argv) {
   d->add_option("--coarse-iterations", slam2d.slam.matcher.coarse_iterations, "Gauss-Newton iterations per coarse level");
   d->add_option("--fine-iterations", slam2d.slam.matcher.fine_iterations, "Gauss-Newton iterations on the finest level");
   d->add_option("--matcher-damping", slam2d.slam.matcher.damping, "Levenberg damping of the scan matcher, relative to the Hessian trace");
+  d->add_option("--sparse-search-without-odometry-rad", slam2d.slam.sparse_search_without_odometry_rad,
+                "heading half-width (rad) of a sparse trajectory's search without odometry");
+  d->add_option("--search-rotation-weight", slam2d.slam.search_without_odometry_rotation_weight,
+                "without odometry, a searched pose's score is weighed by exp(-w·Δθ²) (1/rad²)");
+  d->add_option("--search-translation-weight", slam2d.slam.search_without_odometry_translation_weight,
+                "without odometry, a searched pose's score is weighed by exp(-w·|Δt|²) (1/m²)");
   d->add_option("--relock-margin", slam2d.slam.relock_residual_margin, "match residual above the recent mean that triggers a search (<= 0: off)");
   std::string loop_closure = "off";  // off by default: the front-end figures stay comparable
   d->add_option("--loop-closure", loop_closure, "loop closure with a pose graph (scored: the corrected trajectory)")
@@ -148,6 +154,8 @@ int main(int argc, char** argv) {
   d->add_option("--sparse-loop-edges", slam2d.slam.loop_closure.sparse_loop_edge_keyframes,
                 "keyframes nearest the match a closure against a sparse submap is tied to (0: its anchor)");
   d->add_option("--loop-min-score", slam2d.slam.loop_closure.min_score, "correlative score a loop closure needs");
+  d->add_option("--loop-exclude-recent-submaps", slam2d.slam.loop_closure.exclude_recent_submaps,
+                "a trajectory's newest finished submaps it is not matched against");
   d->add_option("--max-loop-window-m", slam2d.slam.loop_closure.max_window_m,
                 "cap of the loop-closure search window's half-width, metres");
   d->add_option("--max-loop-window-rad", slam2d.slam.loop_closure.max_window_rad,

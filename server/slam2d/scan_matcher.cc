@@ -53,8 +53,9 @@ Normal accumulate(const GridMap2d& map, int level, std::span<const MatchPoint> p
 }
 
 /// The best of a small grid of poses around `initial` by Σ M on the coarsest
-/// level; another pose must beat the guess by 2 % to replace it, so flat
-/// scores (corridor, open space) keep the guess.
+/// level, weighed by the distance to the guess (search_*_weight); another
+/// pose must beat the guess by 2 % to replace it, so flat scores (corridor,
+/// open space) keep the guess.
 Pose2 correlativeSearch(const GridMap2d& map, std::span<const MatchPoint> points, const Pose2& initial,
                         const ScanMatcherOptions& options) {
   const OccupancyGrid& grid = map.level(map.levelCount() - 1);
@@ -81,7 +82,8 @@ Pose2 correlativeSearch(const GridMap2d& map, std::span<const MatchPoint> points
     for (const Eigen::Vector2d& shift : shifts) {
       if (k == 0 && shift.isZero()) continue;
       const Eigen::Vector2d t = initial.translation() + shift;
-      const double sc = score(theta, t);
+      const double sc = score(theta, t) * std::exp(-options.search_rotation_weight * std::pow(k * options.search_step_rad, 2) -
+                                                   options.search_translation_weight * shift.squaredNorm());
       if (sc > best_score) best_score = sc, best = {t.x(), t.y(), normalizeAngle(theta)};
     }
   }

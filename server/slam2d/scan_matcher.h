@@ -38,6 +38,12 @@ struct ScanMatcherOptions {
   double search_m = 0.0;
   double search_step_rad = 0.025;
   int search_points = 60;
+  /// The search's preference for poses near the guess: a candidate's Σ M is
+  /// weighed by exp(−search_rotation_weight·Δθ² − search_translation_weight·|Δt|²),
+  /// Δθ (rad) and Δt (m) its offset from the guess; 0: only the 2 % margin
+  /// the guess keeps.
+  double search_rotation_weight = 0.0;     ///< 1/rad²
+  double search_translation_weight = 0.0;  ///< 1/m²
 };
 
 /// One endpoint in the robot base frame (m), with its calibrated reflectivity (NaN = none).

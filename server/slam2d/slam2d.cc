@@ -56,10 +56,13 @@ void Slam2dOptions::validate() const {
               std::isfinite(odometry_information_xy) && std::isfinite(odometry_information_theta),
           "odometry information must be finite and ≥ 0");
   require(reflectivity_weight >= 0.0 && std::isfinite(reflectivity_weight), "reflectivity_weight must be ≥ 0");
-  require(search_without_odometry_rad >= 0.0 && search_without_odometry_rad <= 3.2 &&
-              search_without_odometry_m >= 0.0 && search_without_odometry_m <= 5.0 &&
-              search_after_large_step_m >= 0.0 && search_after_large_step_m <= 5.0,
-          "search_without_odometry_rad must be in [0, 3.2], the search windows in [0, 5] m");
+  const auto in = [](double v, double hi) { return v >= 0.0 && v <= hi; };
+  require(in(search_without_odometry_rad, 3.2) && in(sparse_search_without_odometry_rad, 3.2) &&
+              in(search_after_large_step_rad, 3.2) && in(search_without_odometry_m, 5.0) &&
+              in(search_after_large_step_m, 5.0),
+          "the search windows must be in [0, 3.2] rad and [0, 5] m");
+  require(in(search_without_odometry_rotation_weight, 1e6) && in(search_without_odometry_translation_weight, 1e6),
+          "search_without_odometry_*_weight must be in [0, 1e6]");
   require(std::isfinite(relock_residual_margin) && relock_search_rad >= 0.0 && relock_search_rad <= 3.2 &&
               relock_search_m >= 0.0 && relock_search_m <= 5.0,
           "relock_residual_margin must be finite, relock_search_rad in [0, 3.2], relock_search_m in [0, 5] m");
@@ -221,9 +224,16 @@ Pose2 Slam2d::addScan(const std::string& trajectory, const LaserScan& scan, cons
     const Pose2 step = odometry_step ? between(*track.odometry, *odometry) : Pose2{};
     const bool search = !odometry_step || step.translation().norm() > options_.search_odometry_step_m ||
                         std::abs(step.theta_rad) > options_.search_odometry_step_rad;
-    if (search) {
-      matcher.search_rad = options_.search_without_odometry_rad;
-      matcher.search_m = odometry_step ? options_.search_after_large_step_m : options_.search_without_odometry_m;
+    if (search && odometry_step) {
+      matcher.search_rad = options_.search_after_large_step_rad;
+      matcher.search_m = options_.search_after_large_step_m;
+    } else if (search) {
+      // Until its scans' spacing is known, a trajectory may be a sparse one.
+      const bool wide = sparse_before || !track.scan_motion_m;
+      matcher.search_rad = wide ? options_.sparse_search_without_odometry_rad : options_.search_without_odometry_rad;
+      matcher.search_m = options_.search_without_odometry_m;
+      matcher.search_rotation_weight = options_.search_without_odometry_rotation_weight;
+      matcher.search_translation_weight = options_.search_without_odometry_translation_weight;
     }
     MatchResult match = matchScan(match_map, points, predicted, prior, matcher);
     if (!search && options_.relock_residual_margin > 0.0 && track.match_residual &&

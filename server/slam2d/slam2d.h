@@ -79,8 +79,8 @@ struct Slam2dOptions {
   double match_point_spacing_m = 0.05;
   /// Without an odometry step the prediction (constant velocity) can be far
   /// off: the matcher then first searches headings and translations within
-  /// this much of it (ScanMatcherOptions::search_rad, search_m). The same
-  /// search, over ±search_after_large_step_m, runs when the odometry step
+  /// this much of it (ScanMatcherOptions::search_rad, search_m). A search
+  /// over ±search_after_large_step_rad / _m runs when the odometry step
   /// exceeds search_odometry_step_m or _rad (sparse logs: odometry error
   /// grows with the step); scans at a few Hz stay below and cost no search.
   /// On the corrected logs (scans ≈ 1 m apart) it lowered the bench's RPE
@@ -89,7 +89,28 @@ struct Slam2dOptions {
   /// (infinite-corridor 0.059 → 0.060; a ±0.4 m window after a step was worse).
   double search_without_odometry_rad = 0.8;
   double search_without_odometry_m = 0.4;
+  double search_after_large_step_rad = 0.8;
   double search_after_large_step_m = 0.2;
+  /// Without odometry a sparse trajectory (see sparse_scan_motion_m) may turn
+  /// 40–60° between scans, and one that reverses its turn lands farther from
+  /// the constant-velocity prediction than ±0.8 rad: its heading search spans
+  /// this much instead. The wider search finds more poses that fit as well
+  /// as the right one in places that look alike, so without odometry the
+  /// search weighs each candidate by its distance to the prediction
+  /// (ScanMatcherOptions::search_*_weight). A trajectory whose spacing is not
+  /// known yet (its first scans) searches as a sparse one. On the CSAIL
+  /// subset (686 scans 0.5–1 m apart, no odometry) from 10 starts with loop
+  /// closure: ATE median 2.68 m (0.78–24.7) → 0.130 m (0.079–0.248); the
+  /// neighbouring settings (rotation weight 0.07–0.15, translation 0.25–2,
+  /// window 1.2–2.4 rad) gave 0.116–0.156 m. The weights alone (window
+  /// 0.8 rad) left it lost (3.7 m); the window alone at 1.6 rad, 0.395 m with
+  /// one start lost. Dense trajectories keep 0.8 rad: on raw intel without
+  /// odometry the weights lowered the relation error 0.048 → 0.022 m, the
+  /// same at 0.8 and 1.6 rad, which cost 2.4× the time. With odometry the
+  /// weights cost corrected intel false closures (docs/BENCHMARKS.md §4).
+  double sparse_search_without_odometry_rad = 1.6;
+  double search_without_odometry_rotation_weight = 0.1;     ///< 1/rad²
+  double search_without_odometry_translation_weight = 0.5;  ///< 1/m²
   double search_odometry_step_m = 0.3;
   double search_odometry_step_rad = 0.2;
   /// Re-locking: when a match (after a small odometry step, no search) fits
