@@ -295,48 +295,27 @@ TEST(Slam2d, RejectsBadScansAndKeepsItsState) {
 }
 
 TEST(Slam2d, RejectsBadOptions) {
-  Slam2dOptions o;
-  o.levels = 0;
-  EXPECT_THROW(Slam2d{o}, std::invalid_argument);
-  o = {};
-  o.range_max_m = o.range_min_m;
-  EXPECT_THROW(Slam2d{o}, std::invalid_argument);
-  o = {};
-  o.occupancy.hit_log_odds = -1.0f;
-  EXPECT_THROW(Slam2d{o}, std::invalid_argument);
-  o = {};
-  o.incidence.window_m = 0.0;
-  EXPECT_THROW(Slam2d{o}, std::invalid_argument);
-  o = {};
-  o.relock_search_m = -1.0;
-  EXPECT_THROW(Slam2d{o}, std::invalid_argument);
-  o = {};
-  o.local_map_keyframes = -1;
-  EXPECT_THROW(Slam2d{o}, std::invalid_argument);
-  o = {};
-  o.sparse_scan_motion_m = NAN;
-  EXPECT_THROW(Slam2d{o}, std::invalid_argument);
-  o = {};
-  o.odometry_heading_kappa = -1e-3;
-  EXPECT_THROW(Slam2d{o}, std::invalid_argument);
-  o = {};
-  o.max_odometry_information_theta = INFINITY;
-  EXPECT_THROW(Slam2d{o}, std::invalid_argument);
-  o = {};
-  o.heading_agreement_scans = 4;
-  EXPECT_THROW(Slam2d{o}, std::invalid_argument);
-  o = {};
-  o.sparse_search_without_odometry_rad = 4.0;
-  EXPECT_THROW(Slam2d{o}, std::invalid_argument);
-  o = {};
-  o.search_after_large_step_rad = -0.1;
-  EXPECT_THROW(Slam2d{o}, std::invalid_argument);
-  o = {};
-  o.search_without_odometry_rotation_weight = NAN;
-  EXPECT_THROW(Slam2d{o}, std::invalid_argument);
-  o = {};
-  o.search_without_odometry_translation_weight = -1.0;
-  EXPECT_THROW(Slam2d{o}, std::invalid_argument);
+  const std::vector<void (*)(Slam2dOptions&)> bad = {
+      [](Slam2dOptions& o) { o.levels = 0; },
+      [](Slam2dOptions& o) { o.range_max_m = o.range_min_m; },
+      [](Slam2dOptions& o) { o.occupancy.hit_log_odds = -1.0f; },
+      [](Slam2dOptions& o) { o.incidence.window_m = 0.0; },
+      [](Slam2dOptions& o) { o.relock_search_m = -1.0; },
+      [](Slam2dOptions& o) { o.local_map_keyframes = -1; },
+      [](Slam2dOptions& o) { o.sparse_scan_motion_m = NAN; },
+      [](Slam2dOptions& o) { o.odometry_heading_kappa = -1e-3; },
+      [](Slam2dOptions& o) { o.max_odometry_information_theta = INFINITY; },
+      [](Slam2dOptions& o) { o.heading_agreement_scans = 4; },
+      [](Slam2dOptions& o) { o.sparse_search_without_odometry_rad = 4.0; },
+      [](Slam2dOptions& o) { o.search_after_large_step_rad = -0.1; },
+      [](Slam2dOptions& o) { o.search_without_odometry_rotation_weight = NAN; },
+      [](Slam2dOptions& o) { o.search_without_odometry_translation_weight = -1.0; },
+  };
+  for (size_t i = 0; i < bad.size(); ++i) {
+    Slam2dOptions o;
+    bad[i](o);
+    EXPECT_THROW(Slam2d{o}, std::invalid_argument) << "bad option " << i;
+  }
 }
 
 TEST(Slam2d, OdometryHeadingPriorFollowsHowWellTheOdometryHeadingsAgree) {
