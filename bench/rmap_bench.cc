@@ -153,6 +153,9 @@ int main(int argc, char** argv) {
                 "correlative score a loop closure against a sparse submap needs");
   d->add_option("--sparse-loop-edges", slam2d.slam.loop_closure.sparse_loop_edge_keyframes,
                 "keyframes nearest the match a closure against a sparse submap is tied to (0: its anchor)");
+  d->add_option("--member-check-exclusion", slam2d.slam.loop_closure.member_check_exclusion_m,
+                "a sparse submap's keyframe is tied to only if the submap without the views within this distance (m) "
+                "places it where it is drawn (< 0: no check)");
   d->add_option("--loop-min-score", slam2d.slam.loop_closure.min_score, "correlative score a loop closure needs");
   d->add_option("--loop-exclude-recent-submaps", slam2d.slam.loop_closure.exclude_recent_submaps,
                 "a trajectory's newest finished submaps it is not matched against");

@@ -393,6 +393,8 @@ int runSlam2dBench(const Slam2dBenchOptions& options) {
                     {"matches", lc->matches},
                     {"ambiguous", lc->ambiguous},
                     {"weak_ambiguous", lc->weak_ambiguous},
+                    {"misdrawn", lc->misdrawn},
+                    {"member_checks", lc->member_checks},
                     {"accepted", lc->accepted},
                     {"unsupported", lc->unsupported},
                     {"rejected_after_optimization", lc->rejected_after_optimization},

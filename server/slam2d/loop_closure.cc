@@ -47,6 +47,9 @@ void LoopClosureOptions::validate() const {
   requireLoopOption(ambiguous_min_score >= 0.0 && ambiguous_min_score <= 1.0, "ambiguous_min_score must be in [0, 1]");
   requireLoopOption(min_match_points >= 0, "min_match_points must be ≥ 0");
   requireLoopOption(sparse_loop_edge_keyframes >= 0, "sparse_loop_edge_keyframes must be ≥ 0");
+  requireLoopOption(std::isfinite(member_check_exclusion_m) && positive(member_check_window_m) && member_check_window_m <= 5.0 &&
+                        nonNegative(member_check_window_rad) && member_check_window_rad <= 3.14159,
+                    "need a finite member_check_exclusion_m, 0 < member_check_window_m ≤ 5, 0 ≤ member_check_window_rad ≤ π");
   requireLoopOption(sparse_raster_dilation_cells >= 0 && sparse_raster_dilation_cells <= 10 && submap.raster_dilation_cells >= 0 &&
                         submap.raster_dilation_cells <= 10,
                     "raster dilation must be in [0, 10] cells");
@@ -206,8 +209,6 @@ void LoopCloser::search(std::vector<Keyframe>& keyframes, size_t query, Trajecto
     std::vector<std::pair<size_t, Pose2>> members;  // in the anchor's frame; matcher() left this submap first in the cache
     for (size_t i = 0; i < submaps_[s].keyframes.size(); ++i)
       members.emplace_back(submaps_[s].keyframes[i], cache_.front().relative[i]);
-    ++stats_.matches;
-    stats_.ambiguous += m->ambiguous();
     Eigen::Matrix3d information = diagonalInformation(options_.loop_sigma_m, options_.loop_sigma_rad);
     if (m->ambiguous()) {
       // Along the rival's direction (anchor frame, the frame of the edge's
@@ -216,7 +217,15 @@ void LoopCloser::search(std::vector<Keyframe>& keyframes, size_t query, Trajecto
       const double weak = std::pow(options_.loop_sigma_m / options_.ambiguous_sigma_along_m, 2);
       information.topLeftCorner<2, 2>() -= (1.0 - weak) / std::pow(options_.loop_sigma_m, 2) * along * along.transpose();
     }
-    std::vector<Pending::Tie> ties = tiesOf(*m, members, anchor, sparse ? options_.sparse_loop_edge_keyframes : 0, information);
+    std::vector<Pending::Tie> ties =
+        tiesOf(*m, members, anchor, sparse ? options_.sparse_loop_edge_keyframes : 0, information,
+               [&](size_t i) { return drawnRight(keyframes, s, i); });
+    if (ties.empty()) {
+      ++stats_.misdrawn;
+      continue;
+    }
+    ++stats_.matches;
+    stats_.ambiguous += m->ambiguous();
     const Pose2 tie_in_anchor = m->pose * ties.front().relative.inverse();
     for (auto& member : members) member.second = tie_in_anchor.inverse() * member.second;
     pending_.push_back({{query, ties.front().keyframe, m->score, ties.front().relative, std::move(members)}, s,
@@ -227,23 +236,75 @@ void LoopCloser::search(std::vector<Keyframe>& keyframes, size_t query, Trajecto
 
 std::vector<LoopCloser::Pending::Tie> LoopCloser::tiesOf(const SubmapMatch& match,
                                                          const std::vector<std::pair<size_t, Pose2>>& members,
-                                                         size_t anchor, int count, const Eigen::Matrix3d& information) {
+                                                         size_t anchor, int count, const Eigen::Matrix3d& information,
+                                                         const std::function<bool(size_t)>& drawn_right) {
   if (count <= 0) return {{anchor, match.pose, information}};
   std::vector<std::pair<double, size_t>> nearest;
   for (size_t i = 0; i < members.size(); ++i)
     nearest.emplace_back((members[i].second.translation() - match.pose.translation()).squaredNorm(), i);
-  const size_t n = std::min(members.size(), static_cast<size_t>(count));
-  std::partial_sort(nearest.begin(), nearest.begin() + static_cast<std::ptrdiff_t>(n), nearest.end());
+  const size_t considered = std::min(members.size(), 2 * static_cast<size_t>(count));
+  std::partial_sort(nearest.begin(), nearest.begin() + static_cast<std::ptrdiff_t>(considered), nearest.end());
+  std::vector<size_t> chosen;
+  for (size_t j = 0; j < considered && chosen.size() < static_cast<size_t>(count); ++j)
+    if (drawn_right(nearest[j].second)) chosen.push_back(nearest[j].second);
   std::vector<Pending::Tie> ties;
-  for (size_t j = 0; j < n; ++j) {
-    const Pose2& member = members[nearest[j].second].second;
+  for (size_t i : chosen) {
+    const Pose2& member = members[i].second;
     // The information is in the anchor's frame; each edge's residual is in its keyframe's.
     Eigen::Matrix3d rotate = Eigen::Matrix3d::Identity();
     rotate.topLeftCorner<2, 2>() = Eigen::Rotation2Dd(member.theta_rad).toRotationMatrix();
-    ties.push_back({members[nearest[j].second].first, member.inverse() * match.pose,
-                    rotate.transpose() * information * rotate / double(n)});
+    ties.push_back({members[i].first, member.inverse() * match.pose,
+                    rotate.transpose() * information * rotate / double(chosen.size())});
   }
   return ties;
+}
+
+bool LoopCloser::drawnRight(const std::vector<Keyframe>& keyframes, size_t submap, size_t index) {
+  if (options_.member_check_exclusion_m < 0.0) return true;
+  const SubmapInfo& info = submaps_[submap];
+  const size_t id = info.keyframes[index];
+  const Keyframe& member = keyframes[id];
+  const Pose2 in_anchor = between(keyframes[info.anchor()].pose, member.pose);
+  if (const auto known = drawn_right_.find(id); known != drawn_right_.end()) {
+    const Pose2 moved = between(known->second.in_anchor, in_anchor);
+    if (moved.translation().norm() <= options_.rerender_shift_m && std::abs(moved.theta_rad) <= options_.rerender_shift_rad)
+      return known->second.right;
+  }
+  std::vector<const Keyframe*> elsewhere;
+  bool observes = false;
+  for (size_t k : info.keyframes) {
+    if ((keyframes[k].pose.translation() - member.pose.translation()).norm() <= options_.member_check_exclusion_m) continue;
+    elsewhere.push_back(&keyframes[k]);
+    observes = observes || !keyframes[k].ends_robot.empty();
+  }
+  bool right = true;  // no views from elsewhere, or no pose they fit: nothing speaks against it
+  if (observes && !member.match_points.empty()) {
+    ++stats_.member_checks;
+    SubmapMatcherOptions check = options_.submap;
+    check.raster_dilation_cells = options_.sparse_raster_dilation_cells;
+    check.occupancy.miss_log_odds = 0.0f;  // the match reads where beams ended; the ray walk would cost most
+    check.ambiguity_margin = 0.0;
+    check.correlative.fast_window_m = options_.member_check_window_m;
+    check.correlative.branch_levels = 3;  // the window is a few cells
+    check.resolution_m *= 2.0;  // a heading off by small_correction_rad still moves points 4 m out by 2 cells
+    check.levels = 1;
+    check.max_refinement_shift_m = options_.member_check_window_m;  // the window bounds the answer already
+    check.max_refinement_shift_rad = options_.member_check_window_rad;
+    std::optional<SubmapMatcher> views;
+    try {
+      views.emplace(elsewhere, member.pose, check);
+    } catch (const std::invalid_argument&) {
+      // Every return of the other views lies beyond their range cut: they draw no cell.
+    }
+    const std::optional<SubmapMatch> m =
+        views ? views->match(member.match_points, Pose2{}, options_.member_check_window_m, options_.member_check_window_rad,
+                             options_.min_score)
+              : std::nullopt;
+    // The heading only: a shift along a corridor is where this match is weakest.
+    right = !m || std::abs(m->pose.theta_rad) <= options_.small_correction_rad;
+  }
+  drawn_right_[id] = {right, in_anchor};
+  return right;
 }
 
 const SubmapMatcher& LoopCloser::matcher(const std::vector<Keyframe>& keyframes, size_t submap) {

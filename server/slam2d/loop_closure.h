@@ -29,10 +29,12 @@
 ///     constrains the graph only weakly (ambiguous_sigma_along_m) along the
 ///     direction of its rival: across a corridor it holds, along it the rest
 ///     of the graph decides, and a match that slid along it is left off by
-///     more than max_loop_error_m after optimisation (check 4); against a
+///     more than max_loop_error_m after optimisation (check 5); against a
 ///     dense submap it is dropped (ambiguous_min_score), and a scan with
 ///     fewer than min_match_points points does not search at all;
-///  4. loop edges carry a Huber loss, and after each optimisation a loop edge
+///  4. a closure against a sparse submap is not tied to a keyframe the rest of
+///     the submap turns away from where it is drawn (member_check_*);
+///  5. loop edges carry a Huber loss, and after each optimisation a loop edge
 ///     still off by more than max_loop_error_m / _rad is disabled and the
 ///     graph optimised again. A closure the optimisation after it kept is
 ///     tentative, and accepted (reported) once a later optimisation keeps it
@@ -45,10 +47,12 @@
 /// No I/O, no threads.
 
 #include <cstdint>
+#include <functional>
 #include <list>
 #include <memory>
 #include <optional>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 #include "graph/pose_graph_2d.h"
@@ -112,6 +116,20 @@ struct LoopClosureOptions {
   /// made raw intel worse (relation error 0.016 → 0.018, 8 false closures
   /// from 5 starts against 0), so they keep the anchor.
   int sparse_loop_edge_keyframes = 5;
+  /// A sparse submap can hold a stretch the front end drew off: in a turn on
+  /// the spot (a few scans from one place, overlapping little) it may err by
+  /// some degrees and correct itself once the robot moves on. The scan matches
+  /// the submap as a whole, so its pose relative to a keyframe of that stretch
+  /// carries the stretch's error. Before a closure is tied to a keyframe, the
+  /// keyframe's points are matched against the submap drawn without the views
+  /// from within member_check_exclusion_m of it, within ±member_check_window_m
+  /// and ±member_check_window_rad; a keyframe they turn by more than
+  /// small_correction_rad from where it is drawn is not tied to, the next nearest
+  /// is (of the 2 · sparse_loop_edge_keyframes nearest; none left: no closure).
+  /// member_check_exclusion_m < 0: no check.
+  double member_check_exclusion_m = 1.0;
+  double member_check_window_m = 0.3;
+  double member_check_window_rad = 0.2;
   /// Correlative score an ambiguous match against a dense submap needs; at 1
   /// none is kept. A dense submap's rival is a slide along a corridor the
   /// match cannot fix, and a closure weakened along it (ambiguous_sigma_along_m)
@@ -231,6 +249,8 @@ struct LoopClosureStats {
   uint64_t matches = 0;        ///< searches that found a verified match
   uint64_t ambiguous = 0;      ///< of the matches, those with a rival (SubmapMatcherOptions::ambiguity_*)
   uint64_t weak_ambiguous = 0; ///< ambiguous matches below ambiguous_min_score, dropped (not in matches)
+  uint64_t misdrawn = 0;       ///< matches against a sparse submap whose nearest keyframes were all drawn off (member_check_*), dropped (not in matches)
+  uint64_t member_checks = 0;  ///< keyframes checked (member_check_*)
   uint64_t accepted = 0;       ///< closures accepted (reported; see ClosureLedger)
   uint64_t unsupported = 0;    ///< dropped for lack of support
   uint64_t rejected_after_optimization = 0;  ///< loop edges disabled (new ones, and accepted ones: withdrawn)
@@ -310,8 +330,14 @@ class LoopCloser {
   /// whose `members` are given in the anchor's frame: to the `count` members
   /// nearest the matched pose, nearest first, sharing `information` (anchor
   /// frame); count 0: one edge from the anchor.
+  /// Members `drawn_right` refuses (index into members) are passed over; of
+  /// the 2 · count nearest, none left: no tie.
   static std::vector<Pending::Tie> tiesOf(const SubmapMatch& match, const std::vector<std::pair<size_t, Pose2>>& members,
-                                          size_t anchor, int count, const Eigen::Matrix3d& information);
+                                          size_t anchor, int count, const Eigen::Matrix3d& information,
+                                          const std::function<bool(size_t)>& drawn_right);
+  /// Whether member `index` of `submap` sits where the submap's views from
+  /// elsewhere place it (member_check_*).
+  bool drawnRight(const std::vector<Keyframe>& keyframes, size_t submap, size_t index);
   const SubmapMatcher& matcher(const std::vector<Keyframe>& keyframes, size_t submap);
   /// The map-frame motion that moves the query keyframe where the closure says it is.
   Pose2 correction(const Pending& pending) const;
@@ -340,6 +366,13 @@ class LoopCloser {
   /// moved beyond rerender_shift_* relative to its anchor), so they are built again.
   void dropBentSubmaps(const std::vector<Keyframe>& keyframes);
   std::list<CachedSubmap> cache_;  ///< most recently used first
+  /// drawnRight's verdicts by keyframe, with the keyframe's pose relative to
+  /// its submap's anchor then: kept while it stays there (rerender_shift_*).
+  struct DrawnVerdict {
+    bool right = true;
+    Pose2 in_anchor;
+  };
+  std::unordered_map<size_t, DrawnVerdict> drawn_right_;
   std::vector<Pending> pending_;
   std::vector<std::vector<size_t>> loop_edges_;  ///< each closure's edges (Pending::ties)
   ClosureLedger ledger_;

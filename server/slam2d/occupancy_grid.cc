@@ -108,7 +108,8 @@ void OccupancyGrid::insert(const Eigen::Vector2d& origin_m, std::span<const Ray>
     const double t_dy = dy != 0.0 ? std::abs(1.0 / dy) : INFINITY;
     double t_x = dx != 0.0 ? ((dx > 0 ? (x + 1 - ox) : (ox - x)) * t_dx) : INFINITY;
     double t_y = dy != 0.0 ? ((dy > 0 ? (y + 1 - oy) : (oy - y)) * t_dy) : INFINITY;
-    int steps = std::abs(end_x - x) + std::abs(end_y - y);
+    const bool steps_walked = update.miss_log_odds != 0.0f;
+    int steps = steps_walked ? std::abs(end_x - x) + std::abs(end_y - y) : 0;
     for (; steps > 0; --steps) {
       miss(x, y, update, cursor);
       if (t_x < t_y) {
@@ -121,7 +122,7 @@ void OccupancyGrid::insert(const Eigen::Vector2d& origin_m, std::span<const Ray>
     }
     if (is_hit)
       hit(end_x, end_y, update, cursor);
-    else
+    else if (steps_walked)
       miss(end_x, end_y, update, cursor);
   }
 }

@@ -20,7 +20,7 @@ namespace rmap::slam2d {
 /// How evidence changes a cell (log-odds, natural log).
 struct OccupancyUpdate {
   float hit_log_odds = 1.0f;    ///< added to the cell holding a beam's endpoint (> 0)
-  float miss_log_odds = -0.4f;  ///< added to each cell a beam crossed (< 0)
+  float miss_log_odds = -0.4f;  ///< added to each cell a beam crossed (< 0; 0: the beams' ends only, no ray walk)
   float min_log_odds = -2.0f;   ///< clamping keeps cells able to change their mind
   float max_log_odds = 3.5f;
 };

@@ -377,6 +377,7 @@ slam2d:
     min_score: 0.62
     sparse_min_score: 0.75
     sparse_loop_edge_keyframes: 1
+    member_check_exclusion_m: -1
     ambiguous_min_score: 0.7
     support_min_separation_m: 0.5
     min_match_points: 20
@@ -401,6 +402,7 @@ slam2d:
   EXPECT_EQ(o.loop_closure.min_score, 0.62);
   EXPECT_EQ(o.loop_closure.sparse_min_score, 0.75);
   EXPECT_EQ(o.loop_closure.sparse_loop_edge_keyframes, 1);
+  EXPECT_EQ(o.loop_closure.member_check_exclusion_m, -1.0);
   EXPECT_EQ(o.loop_closure.ambiguous_min_score, 0.7);
   EXPECT_EQ(o.loop_closure.support_min_separation_m, 0.5);
   EXPECT_EQ(o.loop_closure.min_match_points, 20);

@@ -246,6 +246,71 @@ TEST_F(SimulatedLoop, SparseSubmapClosuresAreTiedWhereTheScanMatched) {
   }
 }
 
+/// A keyframe of `scan` (taken at the true pose) drawn at `drawn`, as Slam2d
+/// makes one: every return's end, and match points 0.1 m apart.
+Keyframe keyframeOf(const LaserScan& scan, const Pose2& drawn) {
+  Keyframe kf;
+  kf.stamp_ns = scan.stamp_ns;
+  kf.pose = drawn;
+  kf.range_max_m = scan.range_max_m;
+  for (size_t i = 0; i < scan.ranges_m.size(); ++i) {
+    const float r = scan.ranges_m[i];
+    if (!std::isfinite(r) || r < scan.range_min_m || r > scan.range_max_m) continue;
+    const Eigen::Vector2f end(r * std::cos(scan.angles_rad[i]), r * std::sin(scan.angles_rad[i]));
+    kf.ends_robot.push_back(end);
+    if (kf.match_points.empty() || (end.cast<double>() - kf.match_points.back()).norm() >= 0.1)
+      kf.match_points.push_back(end.cast<double>());
+  }
+  return kf;
+}
+
+// A sparse submap can hold a stretch the front end drew off (a turn on the
+// spot it got some degrees wrong, then right again). A scan matches the
+// submap as a whole, so its pose relative to a keyframe of that stretch
+// carries the stretch's error: such keyframes are not tied to
+// (member_check_*), and without the check they are.
+TEST_F(SimulatedLoop, ClosuresAreNotTiedToKeyframesDrawnOff) {
+  const std::vector<Pose2> truth = outAndAgain();
+  const size_t off_first = 40, off_last = 47;  // drawn 0.15 rad off, in the second submap of the first pass
+  const auto closures = [&](double exclusion_m) {
+    LoopClosureOptions options;
+    options.sparse_keyframe_spacing_m = 0.0;  // every submap counts as sparse
+    options.member_check_exclusion_m = exclusion_m;
+    LoopCloser closer(options);
+    const sim::Laser2dModel model = sim::Laser2dModel::sickLike();
+    std::mt19937_64 rng(37);
+    std::vector<Keyframe> keyframes;
+    for (size_t k = 0; k < truth.size(); ++k) {
+      Pose2 drawn = truth[k];
+      if (k >= off_first && k <= off_last) drawn.theta_rad += 0.15;
+      keyframes.push_back(keyframeOf(testing::simScan(*world_, truth[k], model, rng, int64_t(k) * 100'000'000), drawn));
+      closer.addKeyframe(keyframes);
+    }
+    closer.confirmAll();
+    return closer.takeClosures();
+  };
+  const auto offStretch = [&](size_t k) { return k >= off_first && k <= off_last; };
+  const auto headingError = [&](const LoopCloser::Closure& c) {
+    return std::abs(normalizeAngle(c.relative.theta_rad - between(truth[c.match], truth[c.query]).theta_rad));
+  };
+  const std::vector<LoopCloser::Closure> unchecked = closures(-1.0);
+  const size_t tied_off = std::count_if(unchecked.begin(), unchecked.end(),
+                                        [&](const LoopCloser::Closure& c) { return offStretch(c.match); });
+  ASSERT_GT(tied_off, 0u) << "no closure reached the stretch drawn off: the test shows nothing";
+  for (const LoopCloser::Closure& c : unchecked) {
+    if (offStretch(c.match)) {
+      EXPECT_GT(headingError(c), 0.1) << "a closure tied to the stretch carries its error";
+    }
+  }
+
+  const std::vector<LoopCloser::Closure> checked = closures(LoopClosureOptions{}.member_check_exclusion_m);
+  ASSERT_GE(checked.size(), 3u);
+  for (const LoopCloser::Closure& c : checked) {
+    EXPECT_FALSE(offStretch(c.match)) << "closure " << c.query << " → " << c.match;
+    EXPECT_LT(headingError(c), 0.03) << "closure " << c.query << " → " << c.match;
+  }
+}
+
 // The hold (confirm_after_s) only delays reports: the graph, and so the
 // trajectory, is the same, and every closure reported with it is one reported
 // without, at the same scan or later.
@@ -343,6 +408,9 @@ TEST(LoopClosureOptions, BadOptionsThrow) {
   throws([](LoopClosureOptions& o) { o.sparse_keyframe_spacing_m = -0.1; });
   throws([](LoopClosureOptions& o) { o.sparse_raster_dilation_cells = -1; });
   throws([](LoopClosureOptions& o) { o.sparse_loop_edge_keyframes = -1; });
+  throws([](LoopClosureOptions& o) { o.member_check_window_m = 0.0; });
+  throws([](LoopClosureOptions& o) { o.member_check_window_rad = -0.1; });
+  throws([](LoopClosureOptions& o) { o.member_check_exclusion_m = std::nan(""); });
   throws([](LoopClosureOptions& o) { o.support_min_separation_m = -1.0; });
   // Off, options are still checked: turning it on later must not be the first time they are.
   throws([](LoopClosureOptions& o) {

@@ -48,6 +48,21 @@ TEST(OccupancyGrid, EvidenceIsClampedAndRaysAreCutAtTheMaximumRange) {
   EXPECT_TRUE(std::isnan(cut.logOdds({5, 0})));
 }
 
+TEST(OccupancyGrid, WithoutMissEvidenceOnlyTheBeamsEndsAreDrawn) {
+  OccupancyUpdate ends_only = kUpdate;
+  ends_only.miss_log_odds = 0.0f;
+  OccupancyGrid grid(1.0);
+  // A return at (3, 0), a beam without one ending in (0, 2), a return beyond the range cut.
+  const std::vector<Ray> rays{{{3.5, 0.5}, true}, {{0.5, 2.5}, false}, {{0.5, 9.5}, true}};
+  grid.insert({0.5, 0.5}, rays, ends_only, 5.0);
+  EXPECT_FLOAT_EQ(grid.logOdds({3, 0}), kUpdate.hit_log_odds);
+  for (const Eigen::Vector2i& cell : {Eigen::Vector2i(1, 0), Eigen::Vector2i(2, 0), Eigen::Vector2i(0, 2),
+                                     Eigen::Vector2i(0, 5), Eigen::Vector2i(0, 9)})
+    EXPECT_TRUE(std::isnan(grid.logOdds(cell))) << cell.transpose() << ": no evidence, so never known";
+  EXPECT_EQ(grid.knownCells().min(), Eigen::Vector2i(3, 0));
+  EXPECT_EQ(grid.knownCells().max(), Eigen::Vector2i(3, 0));
+}
+
 TEST(OccupancyGrid, GrowsInEveryDirection) {
   OccupancyGrid grid(0.05);
   const std::vector<Ray> rays{{{40.01, 0.01}, true}, {{-39.99, 0.01}, true}, {{0.01, 40.01}, true},
