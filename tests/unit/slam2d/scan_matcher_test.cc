@@ -100,6 +100,33 @@ TEST(ScanMatcher, ACorridorLeavesItsAxisAtTheInitialGuess) {
   EXPECT_NEAR(matchScan(map, scan, start, prior, ScanMatcherOptions{}).pose.x_m, 0.2, 0.02);
 }
 
+TEST(ScanMatcher, ATranslationWeightKeepsTheSearchFromSlidingAlongACorridor) {
+  // The map's walls end at x = 4 m; the scan, taken at x = 0, sees them on to
+  // 4.3 m (new ground). A pose 0.2 m back puts those points on mapped wall: the
+  // search's coarse score (Σ M, unknown = 0) rises by more than the 2 % the
+  // guess is given, though the guess is right.
+  GridMap2d map(0.05, 3);
+  std::vector<MatchPoint> walls;
+  for (double x = -8.0; x <= 4.0; x += 0.05) {
+    walls.push_back({{x, 1.025}});
+    walls.push_back({{x, -1.025}});
+  }
+  for (int k = 0; k < 3; ++k) insertAt(map, Pose2{}, walls);
+  std::vector<MatchPoint> scan;
+  for (double x = -2.0; x <= 4.3; x += 0.05) {
+    scan.push_back({{x, 1.025}});
+    scan.push_back({{x, -1.025}});
+  }
+  ScanMatcherOptions options;
+  options.search_rad = options.search_step_rad;
+  options.search_m = 0.2;
+  options.coarse_iterations = options.fine_iterations = 0;  // the search's pick alone
+  const Pose2 guess{0.0, 0.0, 0.0};
+  EXPECT_LT(matchScan(map, scan, guess, std::nullopt, options).pose.x_m, -0.1) << "unweighed, the search slides back";
+  options.search_translation_weight = 2.0;  // a 0.2 m shift costs 8 % of its score
+  EXPECT_NEAR(matchScan(map, scan, guess, std::nullopt, options).pose.x_m, 0.0, 0.05);
+}
+
 TEST(ScanMatcher, ReturnsTheInitialGuessWithNothingToMatch) {
   GridMap2d empty(0.05, 3);
   const std::vector<MatchPoint> scan{{{1.0, 0.0}}, {{0.0, 1.0}}};
