@@ -74,20 +74,28 @@ TEST_F(SimulatedRoom, TheCorrelativeSearchCatchesALargeTurn) {
   EXPECT_NEAR(normalizeAngle(searched.theta_rad - truth.theta_rad), 0.0, 0.005);
 }
 
-TEST(ScanMatcher, ACorridorLeavesItsAxisAtTheInitialGuess) {
-  // Two long walls through the cell centres at y = ±1.025 m: x is unobservable.
-  GridMap2d map(0.05, 3);
+/// Points every 5 cm along two walls parallel to x, at y = left_m and y = right_m, from x = from_m to to_m.
+std::vector<MatchPoint> corridorWalls(double from_m, double to_m, double left_m, double right_m) {
   std::vector<MatchPoint> walls;
-  for (double x = -8.0; x <= 8.0; x += 0.05) {
-    walls.push_back({{x, 1.025}});
-    walls.push_back({{x, -1.025}});
+  for (double x = from_m; x <= to_m; x += 0.05) {
+    walls.push_back({{x, left_m}});
+    walls.push_back({{x, right_m}});
   }
+  return walls;
+}
+
+/// A map of corridorWalls(from_m, to_m, ±1.025) (through the cell centres), seen three times from the origin.
+GridMap2d corridorMap(double from_m, double to_m) {
+  GridMap2d map(0.05, 3);
+  const std::vector<MatchPoint> walls = corridorWalls(from_m, to_m, 1.025, -1.025);
   for (int k = 0; k < 3; ++k) insertAt(map, Pose2{}, walls);
-  std::vector<MatchPoint> scan;
-  for (double x = -4.0; x <= 4.0; x += 0.05) {
-    scan.push_back({{x, 0.955}});  // the robot stands 7 cm off the centre line
-    scan.push_back({{x, -1.095}});
-  }
+  return map;
+}
+
+TEST(ScanMatcher, ACorridorLeavesItsAxisAtTheInitialGuess) {
+  // Two long walls: x is unobservable.
+  const GridMap2d map = corridorMap(-8.0, 8.0);
+  const std::vector<MatchPoint> scan = corridorWalls(-4.0, 4.0, 0.955, -1.095);  // 7 cm off the centre line
   const Pose2 start{0.3, 0.0, 0.0};
   const MatchResult r = matchScan(map, scan, start, std::nullopt, ScanMatcherOptions{});
   EXPECT_NEAR(r.pose.y_m, 0.07, 0.01);
@@ -105,18 +113,8 @@ TEST(ScanMatcher, ATranslationWeightKeepsTheSearchFromSlidingAlongACorridor) {
   // 4.3 m (new ground). A pose 0.2 m back puts those points on mapped wall: the
   // search's coarse score (Σ M, unknown = 0) rises by more than the 2 % the
   // guess is given, though the guess is right.
-  GridMap2d map(0.05, 3);
-  std::vector<MatchPoint> walls;
-  for (double x = -8.0; x <= 4.0; x += 0.05) {
-    walls.push_back({{x, 1.025}});
-    walls.push_back({{x, -1.025}});
-  }
-  for (int k = 0; k < 3; ++k) insertAt(map, Pose2{}, walls);
-  std::vector<MatchPoint> scan;
-  for (double x = -2.0; x <= 4.3; x += 0.05) {
-    scan.push_back({{x, 1.025}});
-    scan.push_back({{x, -1.025}});
-  }
+  const GridMap2d map = corridorMap(-8.0, 4.0);
+  const std::vector<MatchPoint> scan = corridorWalls(-2.0, 4.3, 1.025, -1.025);
   ScanMatcherOptions options;
   options.search_rad = options.search_step_rad;
   options.search_m = 0.2;
