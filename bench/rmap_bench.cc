@@ -158,6 +158,10 @@ int main(int argc, char** argv) {
   d->add_option("--member-check-exclusion", slam2d.slam.loop_closure.member_check_exclusion_m,
                 "a sparse submap's keyframe is tied to only if the submap without the views within this distance (m) "
                 "places it where it is drawn (< 0: no check)");
+  d->add_option("--sequential-sigma-m-per-m", slam2d.slam.loop_closure.sequential_sigma_m_per_m,
+                "pose graph: growth of a consecutive-keyframe edge's translation sigma with its step (m per m)");
+  d->add_option("--sequential-sigma-rad-per-m", slam2d.slam.loop_closure.sequential_sigma_rad_per_m,
+                "pose graph: growth of a consecutive-keyframe edge's heading sigma with its step (rad per m)");
   d->add_option("--loop-min-score", slam2d.slam.loop_closure.min_score, "correlative score a loop closure needs");
   d->add_option("--loop-exclude-recent-submaps", slam2d.slam.loop_closure.exclude_recent_submaps,
                 "a trajectory's newest finished submaps it is not matched against");

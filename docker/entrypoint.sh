@@ -21,7 +21,7 @@ fi
 # A YAML single-quoted scalar: quotes doubled.
 quote() { printf "'%s'" "$(printf '%s' "$1" | sed "s/'/''/g")"; }
 
-generated=$(mktemp /tmp/rmapd-XXXXXX.yaml)  # 0600: the tokens stay the user's
+generated=$(mktemp "${TMPDIR:-/tmp}/rmapd-XXXXXX.yaml")  # 0600: the tokens stay the user's
 {
   cat "$config"
   echo

@@ -381,6 +381,11 @@ class EntrypointTest(unittest.TestCase):
             self.assertEqual(self.status(port, "/v1/robots", "robot-secret-02"), 200)
             health = subprocess.run(["bash", str(DOCKER / "healthcheck.sh")], env={**self.env, "RMAP_PORT": str(port)})
             self.assertEqual(health.returncode, 0)
+            # The generated config (it holds the tokens) is written under TMPDIR, 0600.
+            generated = list(Path(self.dir.name).glob("rmapd-*.yaml"))
+            self.assertEqual(len(generated), 1)
+            self.assertEqual(generated[0].stat().st_mode & 0o777, 0o600)
+            self.assertIn("robot-secret-02", generated[0].read_text())
         finally:
             self.stop(process)
         down = subprocess.run(["bash", str(DOCKER / "healthcheck.sh")], env={**self.env, "RMAP_PORT": str(port)},

@@ -149,7 +149,7 @@ class ReplayTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     data_ = std::make_unique<TempDir>("rmap_replay_rmapd");
-    rmapd_ = std::make_unique<RmapdProcess>(data_->path());
+    rmapd_ = std::make_unique<RmapdProcess>(data_->path() / "data");  // its log beside it, inside the temporary folder
   }
   static void TearDownTestSuite() {
     rmapd_.reset();
