@@ -21,6 +21,7 @@
 #include "common/machine.h"
 #include "slam2d/closure_judge.h"
 #include "slam2d/reflectivity_metrics.h"
+#include "slam2d/revisit_consistency.h"
 #include "slam2d/trajectory_metrics.h"
 
 namespace rmap::bench {
@@ -139,6 +140,7 @@ Paired paired(const std::vector<Slam2dInput>& inputs, const std::vector<Pose2>& 
 }
 
 double orNan(const std::optional<double>& v) { return v.value_or(std::numeric_limits<double>::quiet_NaN()); }
+double orNan(const json& v) { return v.is_number() ? v.get<double>() : std::numeric_limits<double>::quiet_NaN(); }
 
 /// The occupancy grid as an 8-bit image (ROS map_server shades: free 254, occupied 0, unknown 205),
 /// north up, scaled down by area averaging so its longer side is at most max_px.
@@ -232,6 +234,29 @@ std::vector<Slam2dInput> startedAt(const std::vector<Slam2dInput>& inputs, const
   return out;
 }
 
+/// Revisit consistency (revisit_consistency.h) of the run's sensor poses on the revisits they
+/// show and, when the reference has a pose for every scan, of both on the revisits either shows.
+/// @return JSON: pairs, residual_m (null without revisits), against_reference (null without a
+/// whole reference): {pairs, residual_m, reference_residual_m, lowest_estimate, lowest_reference}
+json revisitJson(const std::vector<slam2d::LaserScan>& scans, const std::vector<Pose2>& laser_poses,
+                 const std::vector<std::optional<Pose2>>& reference) {
+  const auto number = [](double v) { return std::isfinite(v) ? json(v) : json(nullptr); };
+  const RevisitConsistency own = revisitConsistency(scans, {laser_poses});
+  json out = {{"pairs", own.pairs}, {"residual_m", number(own.residual_m[0])}, {"against_reference", nullptr}};
+  if (!reference.empty() &&
+      std::all_of(reference.begin(), reference.end(), [](const std::optional<Pose2>& p) { return p.has_value(); })) {
+    std::vector<Pose2> ref;
+    for (const std::optional<Pose2>& p : reference) ref.push_back(*p);
+    const RevisitConsistency both = revisitConsistency(scans, {laser_poses, ref});
+    out["against_reference"] = {{"pairs", both.pairs},
+                                {"residual_m", number(both.residual_m[0])},
+                                {"reference_residual_m", number(both.residual_m[1])},
+                                {"lowest_estimate", both.lowest[0]},
+                                {"lowest_reference", both.lowest[1]}};
+  }
+  return out;
+}
+
 /// The closure counts each run of --repeat reports (keys of judgeClosures' JSON).
 constexpr const char* kRunClosureKeys[] = {"closures", "closures_judged", "false_closures", "false_against_submap",
                                            "false_by_all_judges", "closures_judged_by_relations",
@@ -242,8 +267,8 @@ constexpr const char* kRunClosureKeys[] = {"closures", "closures_judged", "false
 /// closures, closures_judged, false_closures, false_against_submap, false_by_all_judges,
 /// closures_judged_by_relations, false_by_relations, cpu_s}] (the first
 /// is `first_run`) and the median, min and max of ATE over all n runs
-json repeatedRuns(const Slam2dBenchOptions& options, const Slam2dDataset& data, const std::vector<ClosureJudge>& judges,
-                  const json& first_run) {
+json repeatedRuns(const Slam2dBenchOptions& options, const Slam2dDataset& data, const std::vector<slam2d::LaserScan>& scans,
+                  const std::vector<ClosureJudge>& judges, const json& first_run) {
   json runs = json::array({first_run});
   std::mt19937_64 random(1);
   std::uniform_real_distribution<double> offset_m(0.0, 1.0), heading_rad(-std::numbers::pi, std::numbers::pi);
@@ -258,6 +283,7 @@ json repeatedRuns(const Slam2dBenchOptions& options, const Slam2dDataset& data, 
                 {"ate_m", absoluteTrajectoryError(scored.estimate, scored.reference).rmse},
                 {"rpe_1m_m", relativePoseError(scored.estimate, scored.reference, options.rpe_distance_m).translation_m.rmse},
                 {"rel_trans_err_m", relationErrors(stamped(inputs, run.laser_poses), data.relations).translation_m.mean},
+                {"revisit_residual_m", revisitJson(scans, run.laser_poses, {})["residual_m"]},
                 {"cpu_s", run.cpu_s}};
     if (slam.loopClosureStats()) {
       const json judged = judgeClosures(closures.reported, closures.withdrawn, judgedRun(inputs, run.laser_poses), judges,
@@ -265,8 +291,8 @@ json repeatedRuns(const Slam2dBenchOptions& options, const Slam2dDataset& data, 
       for (const char* key : kRunClosureKeys) one[key] = judged[key];
     }
     // Printed in full: a start rounded to a few digits is another run (these runs are chaotic).
-    std::printf("run %d of %d (--start %.17g %.17g %.17g): ATE %.4f m", k + 1, options.repeat, start.x_m, start.y_m,
-                start.theta_rad, one["ate_m"].get<double>());
+    std::printf("run %d of %d (--start %.17g %.17g %.17g): ATE %.4f m, revisit residual %.4f m", k + 1, options.repeat,
+                start.x_m, start.y_m, start.theta_rad, one["ate_m"].get<double>(), orNan(one["revisit_residual_m"]));
     if (one.contains("closures")) {
       if (one["false_closures"].is_null())
         std::printf(", %zu closures (not judged)", one["closures"].get<size_t>());
@@ -288,7 +314,9 @@ json repeatedRuns(const Slam2dBenchOptions& options, const Slam2dDataset& data, 
   // Median, min and max of one figure over the runs, into out as KEY_median, KEY_min, KEY_max.
   const auto spread = [&](const char* key, const char* what) {
     std::vector<double> v;
-    for (const json& r : runs) v.push_back(r[key].get<double>());
+    for (const json& r : runs)
+      if (r[key].is_number()) v.push_back(r[key].get<double>());  // null: the figure was undefined (no revisits)
+    if (v.empty()) return;
     std::sort(v.begin(), v.end());
     const double median = v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
     out[std::string(key) + "_median"] = median;
@@ -297,6 +325,7 @@ json repeatedRuns(const Slam2dBenchOptions& options, const Slam2dDataset& data, 
     std::printf("%s over %zu starts: median %.4f m, min %.4f, max %.4f\n", what, v.size(), median, v.front(), v.back());
   };
   spread("ate_m", "ATE");
+  spread("revisit_residual_m", "revisit residual");
   if (!data.relations.empty()) spread("rel_trans_err_m", "relation error (mean)");
   return out;
 }
@@ -343,6 +372,9 @@ int runSlam2dBench(const Slam2dBenchOptions& options) {
   const Paired scored = paired(data.inputs, run.laser_poses, data.reference);
   const ErrorStats ate = absoluteTrajectoryError(scored.estimate, scored.reference);
   const RelativePoseErrors rpe = relativePoseError(scored.estimate, scored.reference, options.rpe_distance_m);
+  std::vector<slam2d::LaserScan> scans;
+  for (const Slam2dInput& in : data.inputs) scans.push_back(in.scan);
+  const json revisits = revisitJson(scans, run.laser_poses, data.reference);
   // NaN (null in the JSON) when the log's stamps do not measure time.
   const double realtime = orNan(data.duration_s) / run.wall_s;
 
@@ -370,6 +402,7 @@ int runSlam2dBench(const Slam2dBenchOptions& options) {
                      {"pairs", rpe.translation_m.count},
                      {"trans_m", statsJson(rpe.translation_m)},
                      {"rot_deg", statsJson(rpe.rotation_rad, kDegPerRad)}}},
+            {"revisit_consistency", revisits},
             {"log_duration_s", orNan(data.duration_s)},
             {"wall_s", run.wall_s},
             {"realtime_factor", realtime},
@@ -502,6 +535,11 @@ int runSlam2dBench(const Slam2dBenchOptions& options) {
               ref_rel.translation_m.std, ref_rel.rotation_rad.mean * kDegPerRad, ref_rel.rotation_rad.std * kDegPerRad);
   std::printf("ATE vs %s: %.4f m; RPE over %.1f m: %.4f m (%zu pairs)\n", data.reference_kind.c_str(), ate.rmse,
               options.rpe_distance_m, rpe.translation_m.rmse, rpe.translation_m.count);
+  std::printf("revisits: %zu scan pairs, residual %.4f m\n", revisits["pairs"].get<size_t>(), orNan(revisits["residual_m"]));
+  if (const json& both = revisits["against_reference"]; !both.is_null())
+    std::printf("  with the reference's: %zu pairs, residual %.4f m, the reference %.4f m (lower at %zu vs %zu pairs)\n",
+                both["pairs"].get<size_t>(), orNan(both["residual_m"]), orNan(both["reference_residual_m"]),
+                both["lowest_estimate"].get<size_t>(), both["lowest_reference"].get<size_t>());
   if (data.duration_s)
     std::printf("SLAM %.3f s wall, %.3f s CPU; data %.1f s; %.0fx real time (%.0fx on CPU time)\n", run.wall_s,
                 run.cpu_s, *data.duration_s, realtime, *data.duration_s / run.cpu_s);
@@ -517,11 +555,12 @@ int runSlam2dBench(const Slam2dBenchOptions& options) {
   }
   if (options.repeat > 1) {
     json first = {{"start", {start.x_m, start.y_m, start.theta_rad}}, {"ate_m", ate.rmse}, {"rpe_1m_m", rpe.translation_m.rmse},
-                  {"rel_trans_err_m", rel.translation_m.mean}, {"cpu_s", run.cpu_s}};
+                  {"rel_trans_err_m", rel.translation_m.mean}, {"revisit_residual_m", revisits["residual_m"]},
+                  {"cpu_s", run.cpu_s}};
     if (r.contains("loop_closure")) {
       for (const char* key : kRunClosureKeys) first[key] = r["loop_closure"][key];
     }
-    r["repeated"] = repeatedRuns(options, data, judges, first);
+    r["repeated"] = repeatedRuns(options, data, scans, judges, first);
   }
   if (!options.poses_out.empty()) writePoses(options.poses_out, data.inputs, run.laser_poses);
   if (!options.map_image_out.empty()) writeMapImage(options.map_image_out, slam.grid(), options.map_image_max_px);

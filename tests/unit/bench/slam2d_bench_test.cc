@@ -56,6 +56,9 @@ TEST(Slam2dBench, SimulatedRunReportsConsistentFigures) {
   EXPECT_LT(r["reflectivity_rel_err_median"].get<double>(), 0.05);
   EXPECT_GT(r["reflectivity"]["cells_compared"].get<size_t>(), 100u);
   EXPECT_GT(r["reflectivity_spread_raw"].get<double>(), 5 * r["reflectivity_spread_calibrated"].get<double>());
+  // The short tour never comes back: no revisit to check, said so rather than scored 0.
+  EXPECT_EQ(r["revisit_consistency"]["pairs"], 0);
+  EXPECT_TRUE(r["revisit_consistency"]["residual_m"].is_null());
   std::ifstream poses(o.poses_out);
   size_t lines = 0;
   for (std::string line; std::getline(poses, line);) ++lines;
@@ -65,6 +68,28 @@ TEST(Slam2dBench, SimulatedRunReportsConsistentFigures) {
 }
 
 // --repeat: the same run from other starts, each scored; the first is the headline run.
+// The whole simulated tour comes back through its building: the run's scans lie on each other
+// there about as well as under the true poses, whose residual is the sensor noise alone.
+TEST(Slam2dBench, ReportsHowWellRevisitsAgree) {
+  Slam2dBenchOptions o;
+  o.source = "sim:building";
+  o.sim.poses = 600;
+  o.json_out = tempPath("revisits.json").string();
+  ASSERT_EQ(runSlam2dBench(o), 0);
+  std::ifstream in(o.json_out);
+  const nlohmann::json c = nlohmann::json::parse(in)["revisit_consistency"];
+  fs::remove(o.json_out);
+  EXPECT_GT(c["pairs"].get<size_t>(), 50u);
+  const nlohmann::json& both = c["against_reference"];
+  ASSERT_FALSE(both.is_null()) << "the truth covers every scan";
+  EXPECT_EQ(both["lowest_estimate"].get<size_t>() + both["lowest_reference"].get<size_t>(), both["pairs"].get<size_t>());
+  EXPECT_GT(both["lowest_reference"].get<size_t>(), both["lowest_estimate"].get<size_t>()) << "the truth fits more revisits";
+  EXPECT_GT(both["reference_residual_m"].get<double>(), 0.005) << "sensor noise";
+  EXPECT_LT(both["reference_residual_m"].get<double>(), 0.06);
+  EXPECT_NEAR(both["residual_m"].get<double>(), both["reference_residual_m"].get<double>(), 0.01);
+  EXPECT_NEAR(c["residual_m"].get<double>(), both["residual_m"].get<double>(), 0.01);
+}
+
 TEST(Slam2dBench, RepeatedRunsStartElsewhereAndAreEachScored) {
   Slam2dBenchOptions o;
   o.source = "sim:building";
