@@ -86,6 +86,8 @@ int main(int argc, char** argv) {
                 "CARMEN log holding the same scans with the stamps the relations use (a corrected log's raw log)");
   d->add_option("--json", slam2d.json_out, "write results as JSON to this file");
   d->add_option("--poses", slam2d.poses_out, "write the estimated laser poses (stamp_s x y theta) to this file");
+  d->add_option("--revisits", slam2d.revisits_out,
+                "write each revisit's residual (earlier_stamp_s later_stamp_s points run_m [reference_m]) to this file");
   d->add_option("--odometry", slam2d.odometry,
                 "odometry given to the SLAM: auto (raw log: logged poses; corrected log: ODOM increments; "
                 "no ODOM lines: none), logged, odom-increments, none")

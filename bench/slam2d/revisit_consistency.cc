@@ -177,7 +177,11 @@ RevisitConsistency revisitConsistency(const std::vector<slam2d::LaserScan>& scan
     }
     if (counted == 0) continue;  // the two visits saw nothing in common
     ++out.pairs;
-    for (size_t t = 0; t < trajectories.size(); ++t) sum_squared[t] += residual[t] / double(counted);
+    RevisitConsistency::Revisit& revisit = out.revisits.emplace_back(RevisitConsistency::Revisit{i, j, counted, {}});
+    for (size_t t = 0; t < trajectories.size(); ++t) {
+      sum_squared[t] += residual[t] / double(counted);
+      revisit.residual_m.push_back(std::sqrt(residual[t] / double(counted)));
+    }
     ++out.lowest[size_t(std::min_element(residual.begin(), residual.end()) - residual.begin())];
   }
   for (double s : sum_squared)

@@ -52,6 +52,13 @@ struct RevisitConsistency {
   /// Per trajectory: revisits where its residual is the lowest of all
   /// trajectories (ties go to the first).
   std::vector<size_t> lowest;
+  /// Each revisit scored, in scan order: where the figures above come from.
+  struct Revisit {
+    size_t earlier = 0, later = 0;    ///< scan indices
+    size_t points = 0;                ///< endpoints of the later scan that counted
+    std::vector<double> residual_m;   ///< per trajectory, this revisit's rms distance
+  };
+  std::vector<Revisit> revisits;
 };
 
 /// @param scans         the scans in sequence (endpoints in their sensor frames)

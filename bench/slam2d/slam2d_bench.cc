@@ -236,23 +236,41 @@ std::vector<Slam2dInput> startedAt(const std::vector<Slam2dInput>& inputs, const
 
 /// Revisit consistency (revisit_consistency.h) of the run's sensor poses on the revisits they
 /// show and, when the reference has a pose for every scan, of both on the revisits either shows.
+/// @param revisits_out  empty, or a file for each revisit (Slam2dBenchOptions::revisits_out)
 /// @return JSON: pairs, residual_m (null without revisits), against_reference (null without a
 /// whole reference): {pairs, residual_m, reference_residual_m, lowest_estimate, lowest_reference}
-json revisitJson(const std::vector<slam2d::LaserScan>& scans, const std::vector<Pose2>& laser_poses,
-                 const std::vector<std::optional<Pose2>>& reference) {
+json revisitJson(const std::vector<Slam2dInput>& inputs, const std::vector<slam2d::LaserScan>& scans,
+                 const std::vector<Pose2>& laser_poses, const std::vector<std::optional<Pose2>>& reference,
+                 const std::string& revisits_out = "") {
   const auto number = [](double v) { return std::isfinite(v) ? json(v) : json(nullptr); };
   const RevisitConsistency own = revisitConsistency(scans, {laser_poses});
   json out = {{"pairs", own.pairs}, {"residual_m", number(own.residual_m[0])}, {"against_reference", nullptr}};
+  const RevisitConsistency* listed = &own;
+  RevisitConsistency both;
   if (!reference.empty() &&
       std::all_of(reference.begin(), reference.end(), [](const std::optional<Pose2>& p) { return p.has_value(); })) {
     std::vector<Pose2> ref;
     for (const std::optional<Pose2>& p : reference) ref.push_back(*p);
-    const RevisitConsistency both = revisitConsistency(scans, {laser_poses, ref});
+    both = revisitConsistency(scans, {laser_poses, ref});
+    listed = &both;
     out["against_reference"] = {{"pairs", both.pairs},
                                 {"residual_m", number(both.residual_m[0])},
                                 {"reference_residual_m", number(both.residual_m[1])},
                                 {"lowest_estimate", both.lowest[0]},
                                 {"lowest_reference", both.lowest[1]}};
+  }
+  if (!revisits_out.empty()) {
+    std::ofstream file(revisits_out);
+    if (!file) throw std::runtime_error("cannot write " + revisits_out);
+    file << "# earlier_stamp_s later_stamp_s points run_residual_m" << (listed == &both ? " reference_residual_m" : "")
+         << "\n";
+    char line[160];
+    for (const RevisitConsistency::Revisit& r : listed->revisits) {
+      int n = std::snprintf(line, sizeof line, "%.6f %.6f %zu", double(inputs[r.earlier].scan.stamp_ns) * 1e-9,
+                            double(inputs[r.later].scan.stamp_ns) * 1e-9, r.points);
+      for (double residual : r.residual_m) n += std::snprintf(line + n, sizeof line - size_t(n), " %.4f", residual);
+      file << line << "\n";
+    }
   }
   return out;
 }
@@ -283,7 +301,7 @@ json repeatedRuns(const Slam2dBenchOptions& options, const Slam2dDataset& data, 
                 {"ate_m", absoluteTrajectoryError(scored.estimate, scored.reference).rmse},
                 {"rpe_1m_m", relativePoseError(scored.estimate, scored.reference, options.rpe_distance_m).translation_m.rmse},
                 {"rel_trans_err_m", relationErrors(stamped(inputs, run.laser_poses), data.relations).translation_m.mean},
-                {"revisit_residual_m", revisitJson(scans, run.laser_poses, {})["residual_m"]},
+                {"revisit_residual_m", revisitJson(inputs, scans, run.laser_poses, {})["residual_m"]},
                 {"cpu_s", run.cpu_s}};
     if (slam.loopClosureStats()) {
       const json judged = judgeClosures(closures.reported, closures.withdrawn, judgedRun(inputs, run.laser_poses), judges,
@@ -374,7 +392,7 @@ int runSlam2dBench(const Slam2dBenchOptions& options) {
   const RelativePoseErrors rpe = relativePoseError(scored.estimate, scored.reference, options.rpe_distance_m);
   std::vector<slam2d::LaserScan> scans;
   for (const Slam2dInput& in : data.inputs) scans.push_back(in.scan);
-  const json revisits = revisitJson(scans, run.laser_poses, data.reference);
+  const json revisits = revisitJson(data.inputs, scans, run.laser_poses, data.reference, options.revisits_out);
   // NaN (null in the JSON) when the log's stamps do not measure time.
   const double realtime = orNan(data.duration_s) / run.wall_s;
 

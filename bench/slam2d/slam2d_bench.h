@@ -20,6 +20,10 @@ struct Slam2dBenchOptions {
   std::string odometry = "auto";  ///< auto | logged | odom-increments | none (see OdometrySource)
   std::string json_out;        ///< empty: no file
   std::string poses_out;       ///< empty: no file; else one line "stamp_s x y theta" per scan (estimated laser pose)
+  /// empty: no file; else a '#' header line and one line per revisit of the revisit residual (see
+  /// revisit_consistency.h), "earlier_stamp_s later_stamp_s points run_residual_m
+  /// [reference_residual_m]", scored with the reference when it has a pose for every scan
+  std::string revisits_out;
   std::string map_image_out;   ///< empty: no file; else the final occupancy grid, 8-bit (format by extension: .png, .pgm)
   int map_image_max_px = 100000;  ///< the image is scaled down so its longer side is at most this
   /// Corrected logs of the same run (e.g. intel-corrected for raw intel):

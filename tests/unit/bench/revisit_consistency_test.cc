@@ -96,6 +96,15 @@ TEST(RevisitConsistency, ADriftedTrajectoryFitsWorseOnTheSameRevisits) {
   EXPECT_GT(c.residual_m[0], 2.0 * c.residual_m[1]);
   EXPECT_GT(c.lowest[1], c.pairs * 9 / 10) << "the truth fits nearly every revisit better";
   EXPECT_EQ(c.lowest[0] + c.lowest[1], c.pairs);
+  // Each revisit is listed with both residuals, which square-average to the figures.
+  ASSERT_EQ(c.revisits.size(), c.pairs);
+  double sum_squared[2] = {0.0, 0.0};
+  for (const RevisitConsistency::Revisit& r : c.revisits) {
+    EXPECT_GE(r.later, r.earlier + RevisitConsistencyOptions{}.min_scan_gap);
+    EXPECT_GT(r.points, 0u);
+    for (int t = 0; t < 2; ++t) sum_squared[t] += r.residual_m[t] * r.residual_m[t];
+  }
+  for (int t = 0; t < 2; ++t) EXPECT_NEAR(std::sqrt(sum_squared[t] / double(c.pairs)), c.residual_m[t], 1e-12);
   // Truncation bounds any trajectory's residual.
   const RevisitConsistency lost = revisitConsistency(scansAlong(truth), {withHeadingDrift(truth, 0.05)});
   EXPECT_LE(lost.residual_m[0], RevisitConsistencyOptions{}.truncation_m + 1e-12);

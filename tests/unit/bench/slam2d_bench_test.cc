@@ -75,10 +75,29 @@ TEST(Slam2dBench, ReportsHowWellRevisitsAgree) {
   o.source = "sim:building";
   o.sim.poses = 600;
   o.json_out = tempPath("revisits.json").string();
+  o.revisits_out = tempPath("revisits.txt").string();
   ASSERT_EQ(runSlam2dBench(o), 0);
   std::ifstream in(o.json_out);
   const nlohmann::json c = nlohmann::json::parse(in)["revisit_consistency"];
   fs::remove(o.json_out);
+  // The list holds each revisit the figures came from: its residuals square-average to them.
+  std::ifstream list(o.revisits_out);
+  std::string header;
+  std::getline(list, header);
+  EXPECT_EQ(header, "# earlier_stamp_s later_stamp_s points run_residual_m reference_residual_m");
+  size_t rows = 0;
+  double run_sq = 0.0, reference_sq = 0.0;
+  for (double earlier_s, later_s, points, run_m, reference_m; list >> earlier_s >> later_s >> points >> run_m >> reference_m;) {
+    ++rows;
+    EXPECT_LT(earlier_s, later_s);
+    EXPECT_GT(points, 0.0);
+    run_sq += run_m * run_m;
+    reference_sq += reference_m * reference_m;
+  }
+  fs::remove(o.revisits_out);
+  ASSERT_EQ(rows, c["against_reference"]["pairs"].get<size_t>());
+  EXPECT_NEAR(std::sqrt(run_sq / double(rows)), c["against_reference"]["residual_m"].get<double>(), 1e-4);
+  EXPECT_NEAR(std::sqrt(reference_sq / double(rows)), c["against_reference"]["reference_residual_m"].get<double>(), 1e-4);
   EXPECT_GT(c["pairs"].get<size_t>(), 50u);
   const nlohmann::json& both = c["against_reference"];
   ASSERT_FALSE(both.is_null()) << "the truth covers every scan";
