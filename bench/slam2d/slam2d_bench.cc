@@ -283,8 +283,8 @@ constexpr const char* kRunClosureKeys[] = {"closures", "closures_judged", "false
 /// Runs 2..n of --repeat: the run from n − 1 other starts (seeded, so reproducible), each
 /// scored as the headline run is. @return JSON: runs [{start, ate_m, rpe_1m_m, rel_trans_err_m,
 /// closures, closures_judged, false_closures, false_against_submap, false_by_all_judges,
-/// closures_judged_by_relations, false_by_relations, cpu_s}] (the first
-/// is `first_run`) and the median, min and max of ATE over all n runs
+/// closures_judged_by_relations, false_by_relations, revisit_residual_m, cpu_s}] (the first
+/// is `first_run`) and the median, min and max of ATE and of the revisit residual over all n runs
 json repeatedRuns(const Slam2dBenchOptions& options, const Slam2dDataset& data, const std::vector<slam2d::LaserScan>& scans,
                   const std::vector<ClosureJudge>& judges, const json& first_run) {
   json runs = json::array({first_run});
