@@ -62,8 +62,8 @@ void Slam2dOptions::validate() const {
               in(search_after_large_step_m, 5.0),
           "the search windows must be in [0, 3.2] rad and [0, 5] m");
   require(in(search_without_odometry_rotation_weight, 1e6) && in(search_without_odometry_translation_weight, 1e6) &&
-              in(search_after_large_step_translation_weight, 1e6),
-          "search_without_odometry_*_weight and search_after_large_step_translation_weight must be in [0, 1e6]");
+              in(search_after_large_step_translation_weight, 1e6) && in(search_after_large_step_heading_weight, 1e6),
+          "search_without_odometry_*_weight and search_after_large_step_*_weight must be in [0, 1e6]");
   require(std::isfinite(relock_residual_margin) && relock_search_rad >= 0.0 && relock_search_rad <= 3.2 &&
               relock_search_m >= 0.0 && relock_search_m <= 5.0,
           "relock_residual_margin must be finite, relock_search_rad in [0, 3.2], relock_search_m in [0, 5] m");
@@ -229,6 +229,7 @@ Pose2 Slam2d::addScan(const std::string& trajectory, const LaserScan& scan, cons
       matcher.search_rad = options_.search_after_large_step_rad;
       matcher.search_m = options_.search_after_large_step_m;
       matcher.search_translation_weight = options_.search_after_large_step_translation_weight;
+      matcher.search_rotation_weight = options_.search_after_large_step_heading_weight * prior->information.z();
     } else if (search) {
       // Until its scans' spacing is known, a trajectory may be a sparse one.
       const bool wide = sparse_before || !track.scan_motion_m;

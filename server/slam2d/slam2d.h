@@ -120,8 +120,22 @@ struct Slam2dOptions {
   /// medians: csail 0.210 → 0.192 m, edmonton 0.808 → 0.774,
   /// infinite-corridor 0.852 → 0.779, belgioioso 0.098 → 0.087, intel
   /// 0.080 → 0.078, freiburg-101 0.043 → 0.042 (docs/BENCHMARKS.md §4).
-  /// No heading weight: with odometry it cost corrected intel false closures.
   double search_after_large_step_translation_weight = 2.0;  ///< 1/m²
+  /// ... and by exp(−w·I_θ·Δθ²), Δθ its turn from the prediction (rad), I_θ
+  /// the heading prior's information (odometryHeadingInformation: high only
+  /// where the trajectory's odometry headings have agreed with the matches).
+  /// Gauss–Newton cannot undo a wrong pick: the data term's curvature in θ
+  /// dwarfs the prior's. (A fixed heading weight, the same on every log,
+  /// cost corrected intel false closures.) Outdoors, where a turned pose fits look-alike
+  /// structure better, the search turned the freiburg-campus run by 8–24° at
+  /// single scans its odometry got within 0.2–6°, and the run was lost. At
+  /// 1 (at the cap I_θ = 20 a 2° turn keeps 98 % of its score, 10° 54 %,
+  /// 24° 3 %), from 10 starts of each corrected log with loop closure, ATE
+  /// medians: campus 28.6 → 0.32 m, csail 0.192 → 0.179, the others within
+  /// their spread between starts, their revisit residuals unchanged
+  /// (docs/BENCHMARKS.md §4). Dense trajectories have no heading prior, so
+  /// no weight.
+  double search_after_large_step_heading_weight = 1.0;
   double search_odometry_step_m = 0.3;
   double search_odometry_step_rad = 0.2;
   /// Re-locking: when a match (after a small odometry step, no search) fits

@@ -125,6 +125,30 @@ TEST(ScanMatcher, ATranslationWeightKeepsTheSearchFromSlidingAlongACorridor) {
   EXPECT_NEAR(matchScan(map, scan, guess, std::nullopt, options).pose.x_m, 0.0, 0.05);
 }
 
+TEST(ScanMatcher, ARotationWeightKeepsTheSearchFromTurningOntoALookAlike) {
+  // The map holds the scan's walls at the right heading only up to x = 1 m
+  // (new ground beyond), and all of them turned by 0.4 rad (a look-alike
+  // elsewhere in the map): the turned pose scores higher.
+  const std::vector<MatchPoint> scan = corridorWalls(-2.0, 4.0, 1.025, -1.025);
+  std::vector<MatchPoint> seen;
+  for (const MatchPoint& p : scan)
+    if (p.p_m.x() < 1.0) seen.push_back(p);
+  GridMap2d map(0.05, 3);
+  for (int k = 0; k < 3; ++k) {
+    insertAt(map, Pose2{}, seen);
+    insertAt(map, Pose2{0.0, 0.0, 0.4}, scan);
+  }
+  ScanMatcherOptions options;
+  options.search_rad = 0.8;
+  options.coarse_iterations = options.fine_iterations = 0;  // the search's pick alone
+  const Pose2 guess{0.0, 0.0, 0.0};
+  EXPECT_NEAR(matchScan(map, scan, guess, std::nullopt, options).pose.theta_rad, 0.4, 0.03)
+      << "unweighed, the search turns onto the look-alike";
+  options.search_rotation_weight = 20.0;  // a 0.4 rad turn keeps 4 % of its score, 2° keeps 98 %
+  // Near the guess: the coarsest level (0.2 m cells) barely tells 3° apart at these ranges.
+  EXPECT_NEAR(matchScan(map, scan, guess, std::nullopt, options).pose.theta_rad, 0.0, 0.06);
+}
+
 TEST(ScanMatcher, ReturnsTheInitialGuessWithNothingToMatch) {
   GridMap2d empty(0.05, 3);
   const std::vector<MatchPoint> scan{{{1.0, 0.0}}, {{0.0, 1.0}}};

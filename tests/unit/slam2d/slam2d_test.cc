@@ -311,6 +311,7 @@ TEST(Slam2d, RejectsBadOptions) {
       [](Slam2dOptions& o) { o.search_without_odometry_rotation_weight = NAN; },
       [](Slam2dOptions& o) { o.search_without_odometry_translation_weight = -1.0; },
       [](Slam2dOptions& o) { o.search_after_large_step_translation_weight = INFINITY; },
+      [](Slam2dOptions& o) { o.search_after_large_step_heading_weight = -1.0; },
   };
   for (size_t i = 0; i < bad.size(); ++i) {
     Slam2dOptions o;
