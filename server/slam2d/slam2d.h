@@ -123,18 +123,16 @@ struct Slam2dOptions {
   double search_after_large_step_translation_weight = 2.0;  ///< 1/m²
   /// ... and by exp(−w·I_θ·Δθ²), Δθ its turn from the prediction (rad), I_θ
   /// the heading prior's information (odometryHeadingInformation: high only
-  /// where the trajectory's odometry headings have agreed with the matches).
-  /// Gauss–Newton cannot undo a wrong pick: the data term's curvature in θ
-  /// dwarfs the prior's. (A fixed heading weight, the same on every log,
-  /// cost corrected intel false closures.) Outdoors, where a turned pose fits look-alike
-  /// structure better, the search turned the freiburg-campus run by 8–24° at
-  /// single scans its odometry got within 0.2–6°, and the run was lost. At
-  /// 1 (at the cap I_θ = 20 a 2° turn keeps 98 % of its score, 10° 54 %,
-  /// 24° 3 %), from 10 starts of each corrected log with loop closure, ATE
-  /// medians: campus 28.6 → 0.32 m, csail 0.192 → 0.179, the others within
-  /// their spread between starts, their revisit residuals unchanged
-  /// (docs/BENCHMARKS.md §4). Dense trajectories have no heading prior, so
-  /// no weight.
+  /// where the odometry's headings have agreed with the matches; a fixed
+  /// weight cost corrected intel false closures). Gauss–Newton cannot undo a
+  /// wrong pick: the data term's curvature in θ dwarfs the prior's. Outdoors
+  /// the search turned the freiburg-campus run by 8–24° onto look-alike
+  /// structure at single scans its odometry got within 0.2–6°, and the run
+  /// was lost. At 1 (I_θ at its cap 20: a 2° turn keeps 98 % of its score,
+  /// 24° 3 %), ATE medians from 10 starts with loop closure: campus 28.6 →
+  /// 0.32 m, csail 0.192 → 0.179, the other logs within their spread between
+  /// starts and their revisit residuals unchanged (docs/BENCHMARKS.md §4).
+  /// Dense trajectories have no heading prior, so no weight.
   double search_after_large_step_heading_weight = 1.0;
   double search_odometry_step_m = 0.3;
   double search_odometry_step_rad = 0.2;
