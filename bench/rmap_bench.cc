@@ -116,6 +116,10 @@ int main(int argc, char** argv) {
                 "sparse trajectories: heading prior kappa / sigma^2 from the odometry's heading agreement (0: off)");
   d->add_option("--max-odometry-information-theta", slam2d.slam.max_odometry_information_theta,
                 "cap of that heading prior, 1/rad^2");
+  d->add_option("--odometry-translation-kappa", slam2d.slam.odometry_translation_kappa,
+                "sparse trajectories: translation prior kappa / sigma^2 from the odometry's step agreement (0: off)");
+  d->add_option("--max-odometry-information-xy", slam2d.slam.max_odometry_information_xy,
+                "cap of that translation prior, 1/m^2");
   d->add_option("--reflectivity-weight", slam2d.slam.reflectivity_weight, "weight of the reflectivity residual");
   d->add_option("--match-point-spacing", slam2d.slam.match_point_spacing_m, "spacing of the matched endpoints, metres");
   d->add_option("--coarse-iterations", slam2d.slam.matcher.coarse_iterations, "Gauss-Newton iterations per coarse level");

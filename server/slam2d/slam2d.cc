@@ -47,16 +47,16 @@ void Slam2dOptions::validate() const {
   require(map_update_angle_rad >= 0.0 && std::isfinite(map_update_angle_rad), "map_update_angle_rad must be ≥ 0");
   require(range_min_m >= 0.0f && range_max_m > range_min_m && std::isfinite(range_max_m),
           "need 0 ≤ range_min_m < range_max_m < inf");
-  require(odometry_heading_kappa >= 0.0 && std::isfinite(odometry_heading_kappa) &&
-              max_odometry_information_theta >= 0.0 && std::isfinite(max_odometry_information_theta),
-          "odometry_heading_kappa and max_odometry_information_theta must be finite and >= 0");
-  require(heading_agreement_scans >= 5 && heading_agreement_scans <= 10000,
-          "heading_agreement_scans must be in [5, 10000]");
+  const auto in = [](double v, double hi) { return v >= 0.0 && v <= hi; };
+  require(in(odometry_heading_kappa, 1e6) && in(max_odometry_information_theta, 1e6) &&
+              in(odometry_translation_kappa, 1e6) && in(max_odometry_information_xy, 1e6),
+          "odometry_*_kappa and max_odometry_information_* must be in [0, 1e6]");
+  require(odometry_agreement_scans >= 5 && odometry_agreement_scans <= 10000,
+          "odometry_agreement_scans must be in [5, 10000]");
   require(odometry_information_xy >= 0.0 && odometry_information_theta >= 0.0 &&
               std::isfinite(odometry_information_xy) && std::isfinite(odometry_information_theta),
           "odometry information must be finite and ≥ 0");
   require(reflectivity_weight >= 0.0 && std::isfinite(reflectivity_weight), "reflectivity_weight must be ≥ 0");
-  const auto in = [](double v, double hi) { return v >= 0.0 && v <= hi; };
   require(in(search_without_odometry_rad, 3.2) && in(sparse_search_without_odometry_rad, 3.2) &&
               in(search_after_large_step_rad, 3.2) && in(search_without_odometry_m, 5.0) &&
               in(search_after_large_step_m, 5.0),
@@ -81,17 +81,21 @@ void Slam2dOptions::validate() const {
   loop_closure.validate();
 }
 
-double odometryHeadingInformation(const std::deque<double>& disagreement_rad, const Slam2dOptions& options) {
-  if (options.odometry_heading_kappa <= 0.0 ||
-      5 * disagreement_rad.size() < static_cast<size_t>(options.heading_agreement_scans))
-    return options.odometry_information_theta;
-  std::vector<double> sorted(disagreement_rad.begin(), disagreement_rad.end());
-  const auto middle = sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2);
-  std::nth_element(sorted.begin(), middle, sorted.end());
-  const double sigma_rad = 1.4826 * *middle;  // the standard deviation of normal noise with this median |error|
-  const double information = sigma_rad > 0.0 ? options.odometry_heading_kappa / (sigma_rad * sigma_rad)
-                                             : options.max_odometry_information_theta;
-  return std::max(options.odometry_information_theta, std::min(information, options.max_odometry_information_theta));
+Eigen::Vector3d odometryPriorInformation(const std::deque<double>& translation_disagreement_m,
+                                         const std::deque<double>& heading_disagreement_rad, const Slam2dOptions& options) {
+  const auto information = [&](const std::deque<double>& disagreement, double kappa, double floor, double cap) {
+    if (kappa <= 0.0 || 5 * disagreement.size() < static_cast<size_t>(options.odometry_agreement_scans)) return floor;
+    std::vector<double> sorted(disagreement.begin(), disagreement.end());
+    const auto middle = sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2);
+    std::nth_element(sorted.begin(), middle, sorted.end());
+    const double sigma = 1.4826 * *middle;  // the standard deviation of normal noise with this median |error|
+    return std::max(floor, std::min(sigma > 0.0 ? kappa / (sigma * sigma) : cap, cap));
+  };
+  const double xy = information(translation_disagreement_m, options.odometry_translation_kappa,
+                                options.odometry_information_xy, options.max_odometry_information_xy);
+  return {xy, xy,
+          information(heading_disagreement_rad, options.odometry_heading_kappa, options.odometry_information_theta,
+                      options.max_odometry_information_theta)};
 }
 
 Slam2d::Slam2d(Slam2dOptions options)
@@ -218,9 +222,11 @@ Pose2 Slam2d::addScan(const std::string& trajectory, const LaserScan& scan, cons
     const bool sparse_before = sparse(track);  // as of the scans before this one
     std::optional<PosePrior> prior;
     if (odometry_step)
-      prior = PosePrior{predicted, {options_.odometry_information_xy, options_.odometry_information_xy,
-                                    sparse_before ? odometryHeadingInformation(track.heading_disagreement_rad, options_)
-                                                  : options_.odometry_information_theta}};
+      prior = PosePrior{predicted, sparse_before ? odometryPriorInformation(track.translation_disagreement_m,
+                                                                            track.heading_disagreement_rad, options_)
+                                                 : Eigen::Vector3d(options_.odometry_information_xy,
+                                                                   options_.odometry_information_xy,
+                                                                   options_.odometry_information_theta)};
     ScanMatcherOptions matcher = options_.matcher;
     const Pose2 step = odometry_step ? between(*track.odometry, *odometry) : Pose2{};
     const bool search = !odometry_step || step.translation().norm() > options_.search_odometry_step_m ||
@@ -258,10 +264,14 @@ Pose2 Slam2d::addScan(const std::string& trajectory, const LaserScan& scan, cons
                                ? (1.0 - kResidualRate) * *track.match_residual + kResidualRate * match.mean_residual
                                : match.mean_residual;
     estimate = match.pose;
-    if (odometry_step && options_.odometry_heading_kappa > 0.0) {
-      std::deque<double>& disagreement = track.heading_disagreement_rad;
-      disagreement.push_back(std::abs(normalizeAngle(between(track.pose, estimate).theta_rad - step.theta_rad)));
-      if (disagreement.size() > static_cast<size_t>(options_.heading_agreement_scans)) disagreement.pop_front();
+    if (odometry_step) {
+      const Pose2 matched = between(track.pose, estimate);
+      track.translation_disagreement_m.push_back((matched.translation() - step.translation()).norm());
+      track.heading_disagreement_rad.push_back(std::abs(normalizeAngle(matched.theta_rad - step.theta_rad)));
+      if (track.heading_disagreement_rad.size() > static_cast<size_t>(options_.odometry_agreement_scans)) {
+        track.translation_disagreement_m.pop_front();
+        track.heading_disagreement_rad.pop_front();
+      }
     }
   } else if (is_new && !points.empty() && !map_.empty()) {
     // A robot joining a shared map starts where its odometry says, then locks on.

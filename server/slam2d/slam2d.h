@@ -122,7 +122,7 @@ struct Slam2dOptions {
   /// 0.080 → 0.078, freiburg-101 0.043 → 0.042 (docs/BENCHMARKS.md §4).
   double search_after_large_step_translation_weight = 2.0;  ///< 1/m²
   /// ... and by exp(−w·I_θ·Δθ²), Δθ its turn from the prediction (rad), I_θ
-  /// the heading prior's information (odometryHeadingInformation: high only
+  /// the heading prior's information (odometryPriorInformation: high only
   /// where the odometry's headings have agreed with the matches; a fixed
   /// weight cost corrected intel false closures). Gauss–Newton cannot undo a
   /// wrong pick: the data term's curvature in θ dwarfs the prior's. Outdoors
@@ -168,7 +168,7 @@ struct Slam2dOptions {
   /// Sparse trajectories: a heading prior that follows how well the
   /// odometry's headings agree with the matches. σ = 1.4826 · the median of
   /// |matched − odometry| heading step (rad) over the trajectory's last
-  /// heading_agreement_scans odometry steps (at least a fifth of them); the
+  /// odometry_agreement_scans odometry steps (at least a fifth of them); the
   /// prior's θ information (as odometry_information_theta) is then
   /// odometry_heading_kappa / σ², at most max_odometry_information_theta.
   /// Wheel headings of sparse logs differ 5–15× in quality between robots
@@ -180,7 +180,21 @@ struct Slam2dOptions {
   /// and 2 · 10⁻³ traded logs against each other. 0: off.
   double odometry_heading_kappa = 1e-3;
   double max_odometry_information_theta = 20.0;
-  int heading_agreement_scans = 50;
+  /// The same for translation: σ from |matched − odometry| step (m, the
+  /// difference of the two step vectors), x and y information
+  /// odometry_translation_kappa / σ², between odometry_information_xy and
+  /// max_odometry_information_xy. The fixed pull is far weaker than the data
+  /// term, and a sparse scan's match slides along a corridor or past a wall's
+  /// mapped end where the odometry was within a few cm: corrected intel,
+  /// scans 108–112, −0.43 m along 5 m of corridor against the odometry's
+  /// +0.16. From 10 starts with loop closure, ATE medians: edmonton 0.85 →
+  /// 0.43 m, infinite-corridor 0.81 → 0.74, intel 0.078 → 0.071, belgioioso
+  /// 0.098 → 0.091; 3 · 10⁻² broke belgioioso (0.36) and let csail accept
+  /// false closures, 5 · 10⁻³ and 1.5 · 10⁻² were worse on csail or
+  /// belgioioso (docs/BENCHMARKS.md §4). 0: off.
+  double odometry_translation_kappa = 1e-2;
+  double max_odometry_information_xy = 20.0;
+  int odometry_agreement_scans = 50;
   OccupancyUpdate occupancy;             ///< log-odds of hits and misses, clamping
   ScanMatcherOptions matcher;            ///< iterations, damping, step bounds (reflectivity weight set from above)
   IncidenceOptions incidence;            ///< per-beam incidence for the calibration
@@ -199,13 +213,15 @@ struct Slam2dOptions {
   void validate() const;
 };
 
-/// θ information of a sparse trajectory's odometry prior, from how its
-/// odometry's heading steps agreed with the matches (see
-/// Slam2dOptions::odometry_heading_kappa); odometry_information_theta while
-/// fewer than a fifth of heading_agreement_scans steps were seen, and never less.
-/// @param disagreement_rad  |matched − odometry| heading step (rad) of the
-///                          trajectory's newest odometry steps
-double odometryHeadingInformation(const std::deque<double>& disagreement_rad, const Slam2dOptions& options);
+/// Information (x, y: 1/m²; θ: 1/rad²) of a sparse trajectory's odometry
+/// prior, from how its odometry's steps agreed with the matches (see
+/// Slam2dOptions::odometry_translation_kappa and odometry_heading_kappa); each
+/// part is the fixed one (odometry_information_xy / _theta) while fewer than a
+/// fifth of odometry_agreement_scans steps were seen, and never less.
+/// @param translation_disagreement_m  |matched − odometry| step (m) of the trajectory's newest odometry steps
+/// @param heading_disagreement_rad    |matched − odometry| heading step (rad) of the same steps
+Eigen::Vector3d odometryPriorInformation(const std::deque<double>& translation_disagreement_m,
+                                         const std::deque<double>& heading_disagreement_rad, const Slam2dOptions& options);
 
 /// A scan's robot pose at its stamp.
 struct StampedPose2 {
@@ -275,7 +291,8 @@ class Slam2d {
     Pose2 last_update_pose;         ///< pose at the last map update
     std::optional<double> match_residual;  ///< running mean of the matches' mean residual (see relock_*)
     std::optional<double> scan_motion_m;   ///< running mean of the translation between scans (see sparse_scan_motion_m)
-    std::deque<double> heading_disagreement_rad;  ///< newest last: |matched − odometry| heading steps (see odometry_heading_kappa)
+    /// Newest last: |matched − odometry| steps (see odometryPriorInformation).
+    std::deque<double> translation_disagreement_m, heading_disagreement_rad;
     size_t index = 0;                      ///< into names_ and scans_
     std::optional<size_t> keyframe;        ///< its newest keyframe
   };

@@ -305,7 +305,9 @@ TEST(Slam2d, RejectsBadOptions) {
       [](Slam2dOptions& o) { o.sparse_scan_motion_m = NAN; },
       [](Slam2dOptions& o) { o.odometry_heading_kappa = -1e-3; },
       [](Slam2dOptions& o) { o.max_odometry_information_theta = INFINITY; },
-      [](Slam2dOptions& o) { o.heading_agreement_scans = 4; },
+      [](Slam2dOptions& o) { o.odometry_agreement_scans = 4; },
+      [](Slam2dOptions& o) { o.odometry_translation_kappa = NAN; },
+      [](Slam2dOptions& o) { o.max_odometry_information_xy = -1.0; },
       [](Slam2dOptions& o) { o.sparse_search_without_odometry_rad = 4.0; },
       [](Slam2dOptions& o) { o.search_after_large_step_rad = -0.1; },
       [](Slam2dOptions& o) { o.search_without_odometry_rotation_weight = NAN; },
@@ -320,31 +322,40 @@ TEST(Slam2d, RejectsBadOptions) {
   }
 }
 
-TEST(Slam2d, OdometryHeadingPriorFollowsHowWellTheOdometryHeadingsAgree) {
+TEST(Slam2d, OdometryPriorFollowsHowWellTheOdometryStepsAgree) {
   Slam2dOptions o;
   ASSERT_GT(o.odometry_heading_kappa, 0.0);
-  ASSERT_EQ(o.heading_agreement_scans, 50);
-  const auto disagreeing = [](size_t n, double rad) { return std::deque<double>(n, rad); };
-  // Too few steps seen (< a fifth of the window): the fixed weight.
-  EXPECT_EQ(odometryHeadingInformation(disagreeing(9, 0.01), o), o.odometry_information_theta);
-  // σ = 1.4826 · median: 0.01 rad → κ / σ²; ten times the disagreement, a hundredth of the weight.
-  const double sigma_rad = 1.4826 * 0.01;
-  EXPECT_NEAR(odometryHeadingInformation(disagreeing(10, 0.01), o), o.odometry_heading_kappa / (sigma_rad * sigma_rad),
-              1e-9);
-  EXPECT_NEAR(odometryHeadingInformation(disagreeing(50, 0.1), o),
-              odometryHeadingInformation(disagreeing(50, 0.01), o) / 100.0, 1e-9);
+  ASSERT_GT(o.odometry_translation_kappa, 0.0);
+  ASSERT_EQ(o.odometry_agreement_scans, 50);
+  const auto disagreeing = [](size_t n, double value) { return std::deque<double>(n, value); };
+  const auto heading = [&](const std::deque<double>& rad) { return odometryPriorInformation(rad, rad, o).z(); };
+  // Too few steps seen (< a fifth of the window): the fixed weights.
+  EXPECT_EQ(odometryPriorInformation(disagreeing(9, 0.01), disagreeing(9, 0.01), o),
+            Eigen::Vector3d(o.odometry_information_xy, o.odometry_information_xy, o.odometry_information_theta));
+  // σ = 1.4826 · median: 0.01 → κ / σ²; ten times the disagreement, a hundredth of the weight.
+  const double sigma = 1.4826 * 0.01;
+  EXPECT_NEAR(heading(disagreeing(10, 0.01)), o.odometry_heading_kappa / (sigma * sigma), 1e-9);
+  EXPECT_NEAR(heading(disagreeing(50, 0.1)), heading(disagreeing(50, 0.01)) / 100.0, 1e-9);
+  // Translation and heading each from their own steps: good wheels on a robot whose heading slips.
+  const Eigen::Vector3d split = odometryPriorInformation(disagreeing(50, 0.05), disagreeing(50, 0.2), o);
+  const double sigma_m = 1.4826 * 0.05;
+  EXPECT_NEAR(split.x(), o.odometry_translation_kappa / (sigma_m * sigma_m), 1e-9);
+  EXPECT_EQ(split.y(), split.x());
+  EXPECT_NEAR(split.z(), heading(disagreeing(50, 0.2)), 1e-12);
   // The median: a minority of wild steps (slips, turns the wheels misread) does not count.
   std::deque<double> mixed = disagreeing(30, 0.01);
   mixed.insert(mixed.end(), 20, 1.0);
-  EXPECT_NEAR(odometryHeadingInformation(mixed, o), odometryHeadingInformation(disagreeing(50, 0.01), o), 1e-9);
-  // Headings that always agree: the cap, not infinity.
-  EXPECT_EQ(odometryHeadingInformation(disagreeing(50, 0.0), o), o.max_odometry_information_theta);
-  EXPECT_EQ(odometryHeadingInformation(disagreeing(50, 1e-6), o), o.max_odometry_information_theta);
-  // Never below the fixed weight; κ = 0 turns it off.
+  EXPECT_NEAR(heading(mixed), heading(disagreeing(50, 0.01)), 1e-9);
+  // Steps that always agree: the caps, not infinity.
+  EXPECT_EQ(odometryPriorInformation(disagreeing(50, 0.0), disagreeing(50, 1e-6), o),
+            Eigen::Vector3d(o.max_odometry_information_xy, o.max_odometry_information_xy, o.max_odometry_information_theta));
+  // Never below the fixed weights; κ = 0 turns a part off.
   o.odometry_information_theta = 0.5;
-  EXPECT_EQ(odometryHeadingInformation(disagreeing(50, 0.5), o), 0.5);
+  o.odometry_information_xy = 0.7;
+  EXPECT_EQ(odometryPriorInformation(disagreeing(50, 5.0), disagreeing(50, 0.5), o), Eigen::Vector3d(0.7, 0.7, 0.5));
   o.odometry_heading_kappa = 0.0;
-  EXPECT_EQ(odometryHeadingInformation(disagreeing(50, 0.0), o), 0.5);
+  o.odometry_translation_kappa = 0.0;
+  EXPECT_EQ(odometryPriorInformation(disagreeing(50, 0.0), disagreeing(50, 0.0), o), Eigen::Vector3d(0.7, 0.7, 0.5));
 }
 
 }  // namespace
