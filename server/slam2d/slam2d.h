@@ -189,9 +189,10 @@ struct Slam2dOptions {
   /// scans 108–112, −0.43 m along 5 m of corridor against the odometry's
   /// +0.16. From 10 starts with loop closure, ATE medians: edmonton 0.85 →
   /// 0.43 m, infinite-corridor 0.81 → 0.74, intel 0.078 → 0.071, belgioioso
-  /// 0.098 → 0.091; 3 · 10⁻² broke belgioioso (0.36) and let csail accept
-  /// false closures, 5 · 10⁻³ and 1.5 · 10⁻² were worse on csail or
-  /// belgioioso (docs/BENCHMARKS.md §4). 0: off.
+  /// 0.098 → 0.091, but campus 0.32 → 0.43 (it wants a weaker pull: 0.34 at
+  /// 5 · 10⁻³). 3 · 10⁻² broke belgioioso (0.36) and let csail accept false
+  /// closures, 5 · 10⁻³ and 1.5 · 10⁻² were worse on csail or belgioioso
+  /// (docs/BENCHMARKS.md §4). 0: off.
   double odometry_translation_kappa = 1e-2;
   double max_odometry_information_xy = 20.0;
   int odometry_agreement_scans = 50;
