@@ -181,6 +181,9 @@ int main(int argc, char** argv) {
                 "two loop closures support each other only when their queries are this far apart along the path (m)");
   d->add_option("--loop-support-keyframes", slam2d.slam.loop_closure.support_keyframes,
                 "keyframes a loop closure that needs support waits for it");
+  d->add_option("--loop-support-wait-open-fraction", slam2d.slam.loop_closure.support_wait_open_fraction,
+                "on a sparse trajectory a loop closure that needs support also waits this fraction of the distance "
+                "travelled without a closure before it (0: keyframes only)");
   d->add_option("--max-loop-error-m", slam2d.slam.loop_closure.max_loop_error_m,
                 "a loop edge still off by more than this (m) after an optimisation is disabled");
   d->add_option("--loop-ambiguity-margin", slam2d.slam.loop_closure.submap.ambiguity_margin,

@@ -55,6 +55,7 @@ void LoopClosureOptions::validate() const {
                     "raster dilation must be in [0, 10] cells");
   requireLoopOption(nonNegative(small_correction_m) && nonNegative(small_correction_rad), "small_correction_* must be ≥ 0");
   requireLoopOption(support_keyframes >= 0, "support_keyframes must be ≥ 0");
+  requireLoopOption(nonNegative(support_wait_open_fraction), "support_wait_open_fraction must be ≥ 0");
   requireLoopOption(nonNegative(support_tolerance_m) && nonNegative(support_tolerance_rad), "support_tolerance_* must be ≥ 0");
   requireLoopOption(nonNegative(support_min_separation_m), "support_min_separation_m must be ≥ 0");
   requireLoopOption(optimize_every_keyframes >= 1, "optimize_every_keyframes must be ≥ 1");
@@ -229,7 +230,7 @@ void LoopCloser::search(std::vector<Keyframe>& keyframes, size_t query, Trajecto
     const Pose2 tie_in_anchor = m->pose * ties.front().relative.inverse();
     for (auto& member : members) member.second = tie_in_anchor.inverse() * member.second;
     pending_.push_back({{query, ties.front().keyframe, m->score, ties.front().relative, std::move(members)}, s,
-                        std::move(ties), keyframe_count_, trajectory.travel_m, false});
+                        std::move(ties), keyframe_count_, trajectory.travel_m, travel, false});
   }
   stats_.search_s += secondsSince(t0);
 }
@@ -373,9 +374,12 @@ bool LoopCloser::awaitsSupport(const Pending& p, const std::vector<Keyframe>& ke
   if (waited <= static_cast<uint64_t>(options_.support_keyframes)) return true;
   // On a dense trajectory the supporting view lies support_min_separation_m
   // on: wait for twice that much travel (bounded: turning on the spot makes
-  // keyframes without travel).
+  // keyframes without travel). On a sparse one the wait grows with the open
+  // loop before the query: the longer the drift, the fewer views match.
   const TrajectoryState& t = trajectories_[keyframes[p.closure.query].trajectory];
-  return !t.sparse(options_.sparse_keyframe_spacing_m) && t.travel_m - p.query_travel_m < 2.0 * options_.support_min_separation_m &&
+  const double since_query_m = t.travel_m - p.query_travel_m;
+  if (t.sparse(options_.sparse_keyframe_spacing_m)) return since_query_m < options_.support_wait_open_fraction * p.open_travel_m;
+  return since_query_m < 2.0 * options_.support_min_separation_m &&
          waited <= 4 * static_cast<uint64_t>(options_.support_keyframes);
 }
 

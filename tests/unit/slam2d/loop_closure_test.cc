@@ -381,6 +381,72 @@ TEST_F(SimulatedLoop, SupportComesFromAnotherView) {
   EXPECT_GT(sparse.accepted, 0u) << "a sparse trajectory's keyframes support each other at any separation";
 }
 
+// After a long open loop the views that match may come far apart. On a
+// sparse trajectory an unsupported closure waits for support_wait_open_fraction
+// of the distance travelled without a closure, not only support_keyframes:
+// here the second pass's only two views with match points (against different
+// submaps) lie more keyframes apart than support_keyframes, but within that
+// share of the open loop.
+TEST_F(SimulatedLoop, SparseClosuresWaitForAShareOfTheOpenLoop) {
+  const std::vector<Pose2> truth = outAndAgain();
+  size_t second_pass = 1;
+  while ((truth[second_pass].translation() - truth[0].translation()).norm() > 1e-9) ++second_pass;
+  const LoopClosureOptions defaults;
+  struct Run {
+    LoopClosureStats stats;
+    std::vector<LoopCloser::Closure> closures;
+  };
+  // views: the second pass's keyframes that keep their match points (empty: all).
+  const auto run = [&](double small_correction, double wait_open_fraction, const std::vector<size_t>& views) {
+    LoopClosureOptions options;
+    options.sparse_keyframe_spacing_m = 0.0;  // every trajectory counts as sparse
+    options.small_correction_m = small_correction;
+    options.small_correction_rad = small_correction;
+    options.search_every_keyframes = 1;
+    options.support_wait_open_fraction = wait_open_fraction;
+    LoopCloser closer(options);
+    const sim::Laser2dModel model = sim::Laser2dModel::sickLike();
+    std::mt19937_64 rng(38);
+    std::vector<Keyframe> keyframes;
+    for (size_t k = 0; k < truth.size(); ++k) {
+      keyframes.push_back(keyframeOf(testing::simScan(*world_, truth[k], model, rng, int64_t(k) * 100'000'000), truth[k]));
+      if (k >= second_pass && !views.empty() && std::find(views.begin(), views.end(), k) == views.end())
+        keyframes.back().match_points.clear();
+      closer.addKeyframe(keyframes);
+    }
+    closer.confirmAll();
+    return Run{closer.stats(), closer.takeClosures()};
+  };
+  // The two views: with every view searching and waiting for ever, the second
+  // pass's first query that closes, and the first more than
+  // support_keyframes later that closes against another submap.
+  const Run all_views = run(0.0, 1e9, {});
+  const auto submapOf = [&](size_t keyframe) { return keyframe / size_t(defaults.submap_keyframes); };
+  std::vector<size_t> views;
+  size_t first_submap = 0;
+  for (const LoopCloser::Closure& c : all_views.closures) {
+    if (c.query < second_pass || views.size() == 2) continue;
+    if (views.empty()) {
+      views.push_back(c.query);
+      first_submap = submapOf(c.match);
+    } else if (c.query > views[0] + size_t(defaults.support_keyframes) && submapOf(c.match) != first_submap) {
+      views.push_back(c.query);
+    }
+  }
+  ASSERT_EQ(views.size(), 2u) << "the second pass did not close twice far enough apart: the test shows nothing";
+  const Run keyframes_only = run(0.0, 0.0, views);
+  ASSERT_GE(keyframes_only.stats.matches, 2u);
+  EXPECT_TRUE(std::none_of(keyframes_only.closures.begin(), keyframes_only.closures.end(),
+                           [&](const LoopCloser::Closure& c) { return c.query >= second_pass; }))
+      << "the first view gave up its wait before the second came";
+  const Run open_share = run(0.0, defaults.support_wait_open_fraction, views);
+  for (const size_t view : views) {
+    EXPECT_TRUE(std::any_of(open_share.closures.begin(), open_share.closures.end(),
+                            [&](const LoopCloser::Closure& c) { return c.query == view; }))
+        << "view " << view << " closes, supported by the other";
+  }
+}
+
 TEST(LoopClosureOptions, BadOptionsThrow) {
   const auto throws = [](auto change) {
     Slam2dOptions options;
@@ -412,6 +478,8 @@ TEST(LoopClosureOptions, BadOptionsThrow) {
   throws([](LoopClosureOptions& o) { o.member_check_window_rad = -0.1; });
   throws([](LoopClosureOptions& o) { o.member_check_exclusion_m = std::nan(""); });
   throws([](LoopClosureOptions& o) { o.support_min_separation_m = -1.0; });
+  throws([](LoopClosureOptions& o) { o.support_wait_open_fraction = -0.1; });
+  throws([](LoopClosureOptions& o) { o.support_wait_open_fraction = NAN; });
   // Off, options are still checked: turning it on later must not be the first time they are.
   throws([](LoopClosureOptions& o) {
     o.enabled = false;
