@@ -87,7 +87,8 @@ int main(int argc, char** argv) {
   d->add_option("--json", slam2d.json_out, "write results as JSON to this file");
   d->add_option("--poses", slam2d.poses_out, "write the estimated laser poses (stamp_s x y theta) to this file");
   d->add_option("--revisits", slam2d.revisits_out,
-                "write each revisit's residual (earlier_stamp_s later_stamp_s points run_m [reference_m]) to this file");
+                "write each revisit's residual (earlier_stamp_s later_stamp_s earlier_scan later_scan points run_m "
+                "[reference_m]; scans are 0-based indices into the log) to this file");
   d->add_option("--odometry", slam2d.odometry,
                 "odometry given to the SLAM: auto (raw log: logged poses; corrected log: ODOM increments; "
                 "no ODOM lines: none), logged, odom-increments, none")

@@ -262,12 +262,13 @@ json revisitJson(const std::vector<Slam2dInput>& inputs, const std::vector<slam2
   if (!revisits_out.empty()) {
     std::ofstream file(revisits_out);
     if (!file) throw std::runtime_error("cannot write " + revisits_out);
-    file << "# earlier_stamp_s later_stamp_s points run_residual_m" << (listed == &both ? " reference_residual_m" : "")
-         << "\n";
-    char line[160];
+    // Scan indices beside the stamps: some logs carry no stamps.
+    file << "# earlier_stamp_s later_stamp_s earlier_scan later_scan points run_residual_m"
+         << (listed == &both ? " reference_residual_m" : "") << "\n";
+    char line[200];
     for (const RevisitConsistency::Revisit& r : listed->revisits) {
-      int n = std::snprintf(line, sizeof line, "%.6f %.6f %zu", double(inputs[r.earlier].scan.stamp_ns) * 1e-9,
-                            double(inputs[r.later].scan.stamp_ns) * 1e-9, r.points);
+      int n = std::snprintf(line, sizeof line, "%.6f %.6f %zu %zu %zu", double(inputs[r.earlier].scan.stamp_ns) * 1e-9,
+                            double(inputs[r.later].scan.stamp_ns) * 1e-9, r.earlier, r.later, r.points);
       for (double residual : r.residual_m) n += std::snprintf(line + n, sizeof line - size_t(n), " %.4f", residual);
       file << line << "\n";
     }

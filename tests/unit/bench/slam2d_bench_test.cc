@@ -84,12 +84,16 @@ TEST(Slam2dBench, ReportsHowWellRevisitsAgree) {
   std::ifstream list(o.revisits_out);
   std::string header;
   std::getline(list, header);
-  EXPECT_EQ(header, "# earlier_stamp_s later_stamp_s points run_residual_m reference_residual_m");
+  EXPECT_EQ(header, "# earlier_stamp_s later_stamp_s earlier_scan later_scan points run_residual_m reference_residual_m");
   size_t rows = 0;
   double run_sq = 0.0, reference_sq = 0.0;
-  for (double earlier_s, later_s, points, run_m, reference_m; list >> earlier_s >> later_s >> points >> run_m >> reference_m;) {
+  for (double earlier_s, later_s, earlier_scan, later_scan, points, run_m, reference_m;
+       list >> earlier_s >> later_s >> earlier_scan >> later_scan >> points >> run_m >> reference_m;) {
     ++rows;
     EXPECT_LT(earlier_s, later_s);
+    EXPECT_LT(earlier_scan, later_scan);
+    // The simulated scans come at 10 Hz: the indices and the stamps tell the same span.
+    EXPECT_NEAR(later_s - earlier_s, 0.1 * (later_scan - earlier_scan), 1e-6);
     EXPECT_GT(points, 0.0);
     run_sq += run_m * run_m;
     reference_sq += reference_m * reference_m;
