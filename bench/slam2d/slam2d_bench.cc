@@ -379,7 +379,8 @@ int runSlam2dBench(const Slam2dBenchOptions& options) {
   }
   if (options.repeat > 1) startedAt(data.inputs, start);  // refuses a run it cannot move before the first run
   std::cout << data.name << ": " << data.inputs.size() << " scans, odometry: " << data.odometry_kind
-            << ", reference: " << data.reference_kind << std::endl;
+            << ", reference: " << data.reference_kind
+            << (data.scans_numbered ? "; its stamps do not tell the scans apart: numbered instead" : "") << std::endl;
 
   slam2d::Slam2d slam(options.slam);
   const SlamRun run = runSlam(slam, data.inputs);
@@ -410,6 +411,7 @@ int runSlam2dBench(const Slam2dBenchOptions& options) {
             {"reference_poses", scored.reference.size()},
             {"stamps_file", options.stamps_path},
             {"stamps_replaced", data.stamps_replaced},
+            {"scans_numbered", data.scans_numbered},
             {"relations_file", options.relations_path},
             {"relations_total", data.relations.size()},
             {"relations_used", rel.relations_used},

@@ -8,6 +8,7 @@
 #include <random>
 #include <stdexcept>
 #include <unordered_map>
+#include <unordered_set>
 
 #include "datasets/carmen_log.h"
 #include "sim/building.h"
@@ -31,6 +32,15 @@ std::optional<double> spanOfStamps(std::vector<int64_t> stamps) {
     if (stamps[i] - stamps[i - 1] > 600'000'000'000) return std::nullopt;
   }
   return double(stamps.back() - stamps.front()) * 1e-9;
+}
+
+/// See Slam2dDataset::scans_numbered.
+void numberScansWithoutStamps(Slam2dDataset& data) {
+  std::unordered_set<int64_t> distinct;
+  for (const Slam2dInput& in : data.inputs) distinct.insert(in.scan.stamp_ns);
+  if (2 * distinct.size() >= data.inputs.size()) return;
+  for (size_t k = 0; k < data.inputs.size(); ++k) data.inputs[k].scan.stamp_ns = static_cast<int64_t>(k);
+  data.scans_numbered = true;
 }
 
 Slam2dDataset fromLog(const std::string& path, OdometrySource odometry) {
@@ -248,6 +258,8 @@ Slam2dDataset loadSlam2dDataset(const std::string& source, const Slam2dSourceOpt
   }
   if (!options.stamps_path.empty()) takeStampsFrom(data, options.stamps_path);
   if (!options.reference_path.empty()) useReferenceLog(data, options.reference_path);
+  // Only when no other log is to be matched by stamp: its scans would not carry the numbers.
+  if (options.stamps_path.empty() && options.reference_path.empty()) numberScansWithoutStamps(data);
   if (!options.relations_path.empty()) data.relations = datasets::readSlamRelations(options.relations_path);
   return data;
 }

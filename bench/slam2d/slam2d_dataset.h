@@ -64,6 +64,12 @@ struct Slam2dDataset {
   std::optional<double> duration_s;
   size_t skipped_lines = 0;  ///< log lines of other messages
   size_t stamps_replaced = 0;  ///< scans that took their stamp from Slam2dSourceOptions::stamps_path
+  /// The log's stamps did not tell its scans apart (fewer distinct stamps than
+  /// half the scans: some corrected logs print them with 6 significant digits,
+  /// or as 0), so each scan carries its index as stamp (ns): closures and
+  /// revisits still name their scans and can be judged. The numbers measure
+  /// no time; duration_s is what the log's own stamps say.
+  bool scans_numbered = false;
 };
 
 struct Slam2dSourceOptions {

@@ -224,6 +224,33 @@ TEST(Slam2dBench, StampsFromTheLogHoldingTheSameScans) {
   fs::remove(raw);
 }
 
+// A log whose stamps do not tell its scans apart (printed with 6 significant
+// digits, or 0) is numbered instead, so its closures can be judged; one whose
+// stamps do is left alone, and so is a log whose stamps come from another.
+TEST(Slam2dBench, ScansOfALogWithoutDistinctStampsAreNumbered) {
+  const fs::path path = tempPath("stampless.log"), stamped = tempPath("stamped.log");
+  std::ofstream(path) << "FLASER 3 1 2 3 0 0 0 0 0 0 1.01893e+09 h 1.01893e+09\n"
+                         "FLASER 3 2 3 4 1 0 0 1 0 0 1.01893e+09 h 1.01893e+09\n"
+                         "FLASER 3 3 4 5 2 0 0 2 0 0 1.01893e+09 h 1.01893e+09\n";
+  std::ofstream(stamped) << "FLASER 3 1 2 3 0 0 0 0 0 0 0.5 h 0\nFLASER 3 2 3 4 1 0 0 1 0 0 0.6 h 0\n"
+                            "FLASER 3 3 4 5 2 0 0 2 0 0 0.6 h 0\n";
+  const Slam2dDataset numbered = loadSlam2dDataset(path.string(), {});
+  EXPECT_TRUE(numbered.scans_numbered);
+  ASSERT_EQ(numbered.inputs.size(), 3u);
+  for (size_t k = 0; k < 3; ++k) EXPECT_EQ(numbered.inputs[k].scan.stamp_ns, int64_t(k));
+  EXPECT_FALSE(numbered.duration_s) << "the numbers measure no time";
+  const Slam2dDataset kept = loadSlam2dDataset(stamped.string(), {});
+  EXPECT_FALSE(kept.scans_numbered) << "two distinct stamps of three tell most scans apart";
+  EXPECT_EQ(kept.inputs[2].scan.stamp_ns, 600000000);
+  Slam2dSourceOptions from_stamped;
+  from_stamped.stamps_path = stamped.string();
+  const Slam2dDataset taken = loadSlam2dDataset(path.string(), from_stamped);
+  EXPECT_FALSE(taken.scans_numbered);
+  EXPECT_EQ(taken.inputs[0].scan.stamp_ns, 500000000);
+  fs::remove(path);
+  fs::remove(stamped);
+}
+
 // A corrected log run with --stamps-from carries the raw log's stamps: a
 // second correction judging its closures must find its scans there too.
 TEST(Slam2dBench, ClosureJudgesFindTheirScansWhereTheRunsStampsCameFrom) {
