@@ -151,6 +151,8 @@ json judgeClosures(const std::vector<slam2d::LoopClosure2d>& closures,
 
   std::vector<size_t> judged(judges.size(), 0), wrong(judges.size(), 0), wrong_withdrawn(judges.size(), 0);
   std::vector<size_t> judged_submap(judges.size(), 0), wrong_submap(judges.size(), 0);
+  std::vector<size_t> wrong_across(judges.size(), 0);
+  size_t ambiguous = 0;
   std::vector<double> worst_m(judges.size(), 0.0);
   size_t cross = 0, judged_by_all = 0, wrong_by_all = 0;
   const RelationChain chain(relations, run.stamps_ns);
@@ -163,8 +165,10 @@ json judgeClosures(const std::vector<slam2d::LoopClosure2d>& closures,
     const Pose2 mount = query ? run.sensor_mounts[*query] : Pose2{};
     const Pose2 measured = mount.inverse() * c.relative * mount;  // laser to laser
     const bool was_withdrawn = isWithdrawn(c);
+    ambiguous += c.ambiguous_direction.has_value();
     json item = {{"query_stamp_ns", c.query_stamp_ns}, {"match_stamp_ns", c.match_stamp_ns}, {"score", c.score},
-                 {"relative", {c.relative.x_m, c.relative.y_m, c.relative.theta_rad}}, {"withdrawn", was_withdrawn}};
+                 {"relative", {c.relative.x_m, c.relative.y_m, c.relative.theta_rad}}, {"withdrawn", was_withdrawn},
+                 {"ambiguous", c.ambiguous_direction.has_value()}};
     json by_judge = json::array();
     size_t judged_here = 0, wrong_here = 0;
     for (size_t j = 0; j < judges.size(); ++j) {
@@ -185,6 +189,17 @@ json judgeClosures(const std::vector<slam2d::LoopClosure2d>& closures,
       worst_m[j] = std::max(worst_m[j], error_m);
       json verdict = {{"error_m", error_m}, {"error_deg", std::abs(e.theta_rad) * 180.0 / std::numbers::pi},
                       {"false", is_wrong}};
+      // An ambiguous closure measures its relative pose across its rival's
+      // direction only: judged there too (its heading as any closure's).
+      bool wrong_across_here = is_wrong;
+      if (c.ambiguous_direction && match) {
+        const Eigen::Vector2d along = Eigen::Rotation2Dd(-run.sensor_mounts[*match].theta_rad) * *c.ambiguous_direction;
+        const Eigen::Vector2d d = measured.translation() - between(*rm, *rq).translation();  // the match's laser frame
+        const double across_m = (d - d.dot(along) * along).norm();
+        wrong_across_here = across_m > ClosureJudge::kMaxError_m || std::abs(e.theta_rad) > ClosureJudge::kMaxError_rad;
+        verdict.update({{"error_across_ambiguity_m", across_m}, {"false_across_ambiguity", wrong_across_here}});
+      }
+      wrong_across[j] += wrong_across_here;
       if (const std::optional<Pose2> anchor = submapAnchor(c, match, inputOf, run, judges[j])) {
         const Pose2 es = between(between(*anchor, *rq), measured);
         const bool submap_wrong =
@@ -231,6 +246,7 @@ json judgeClosures(const std::vector<slam2d::LoopClosure2d>& closures,
                          {"false_closures_withdrawn", wrong_withdrawn[j]},
                          {"closures_judged_against_submap", judged_submap[j]},
                          {"false_against_submap", wrong_submap[j]},
+                         {"false_across_ambiguity", wrong_across[j]},
                          {"worst_closure_error_m", judged[j] > 0 ? json(worst_m[j]) : json(nullptr)},
                          {"judge_poses_contradicted", contradicted[j]}});
   const bool first = !judges.empty() && judged.front() > 0;
@@ -243,6 +259,8 @@ json judgeClosures(const std::vector<slam2d::LoopClosure2d>& closures,
           {"false_closures_withdrawn", first ? json(wrong_withdrawn.front()) : json(nullptr)},
           {"worst_closure_error_m", first ? json(worst_m.front()) : json(nullptr)},
           {"false_against_submap", first ? json(wrong_submap.front()) : json(nullptr)},
+          {"ambiguous_closures", ambiguous},
+          {"false_across_ambiguity", first ? json(wrong_across.front()) : json(nullptr)},
           {"judged_by", judges.empty() ? json(nullptr) : json(judges.front().judged_by)},
           {"judge_poses_contradicted", judges.empty() ? json(nullptr) : json(contradicted.front())},
           {"judges", per_judge},

@@ -82,12 +82,16 @@ size_t markContradictedPoses(ClosureJudge& judge, const std::vector<datasets::Sl
 /// headline fields.
 /// @return JSON: closures, withdrawn, cross_trajectory_closures;
 ///         closures_judged, false_closures, false_closures_withdrawn,
-///         worst_closure_error_m, false_against_submap and judged_by (the
-///         first judge's; null without a judge); judges (each judge's counts,
-///         also closures_judged_against_submap and false_against_submap);
+///         worst_closure_error_m, false_against_submap, false_across_ambiguity
+///         (false with each ambiguous closure judged across its
+///         LoopClosure2d::ambiguous_direction only) and judged_by (the
+///         first judge's; null without a judge); ambiguous_closures; judges
+///         (each judge's counts, also closures_judged_against_submap,
+///         false_against_submap and false_across_ambiguity);
 ///         closures_judged_by_all and false_by_all_judges (with two judges or
-///         more, else null); list (each closure with `withdrawn`, the first
-///         judge's errors — submap_error_m, submap_error_deg and
+///         more, else null); list (each closure with `withdrawn` and
+///         `ambiguous`, the first judge's errors — error_across_ambiguity_m
+///         and false_across_ambiguity for an ambiguous one, submap_error_m, submap_error_deg and
 ///         false_against_submap where the submap had 3 keyframes with a
 ///         judge's pose — and, with two judges or more, by_judge);
 ///         with `relations`, each judge judges without the poses they

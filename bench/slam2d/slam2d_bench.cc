@@ -278,8 +278,8 @@ json revisitJson(const std::vector<Slam2dInput>& inputs, const std::vector<slam2
 
 /// The closure counts each run of --repeat reports (keys of judgeClosures' JSON).
 constexpr const char* kRunClosureKeys[] = {"closures", "closures_judged", "false_closures", "false_against_submap",
-                                           "false_by_all_judges", "closures_judged_by_relations",
-                                           "false_by_relations"};
+                                           "false_across_ambiguity", "ambiguous_closures", "false_by_all_judges",
+                                           "closures_judged_by_relations", "false_by_relations"};
 
 /// Runs 2..n of --repeat: the run from n − 1 other starts (seeded, so reproducible), each
 /// scored as the headline run is. @return JSON: runs [{start, ate_m, rpe_1m_m, rel_trans_err_m,
@@ -472,12 +472,13 @@ int runSlam2dBench(const Slam2dBenchOptions& options) {
                                  : " (" + std::to_string(j["judge_poses_contradicted"].get<size_t>()) +
                                        " of its poses contradict the relations: what they would judge is not)";
       std::printf("  %zu judged by %s%s: %zu false (%zu of them withdrawn later), worst %.3f m; against the whole "
-                  "submap %zu false of %zu\n",
+                  "submap %zu false of %zu; %zu false with the %zu ambiguous judged across their rival only\n",
                   j["closures_judged"].get<size_t>(), j["judged_by"].get<std::string>().c_str(), vetted.c_str(),
                   j["false_closures"].get<size_t>(),
                   j["false_closures_withdrawn"].get<size_t>(),
                   j["worst_closure_error_m"].is_null() ? 0.0 : j["worst_closure_error_m"].get<double>(),
-                  j["false_against_submap"].get<size_t>(), j["closures_judged_against_submap"].get<size_t>());
+                  j["false_against_submap"].get<size_t>(), j["closures_judged_against_submap"].get<size_t>(),
+                  j["false_across_ambiguity"].get<size_t>(), lc_json["ambiguous_closures"].get<size_t>());
     }
     if (!lc_json["false_by_relations"].is_null())
       std::printf("  %zu judged by the relations chained from match to query: %zu false, worst %.3f m\n",

@@ -11,6 +11,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <unordered_map>
 #include <utility>
 #include <vector>
@@ -26,6 +27,10 @@ struct KeyframeClosure {
   Pose2 relative;  ///< the matched pose of the query in the match's frame (the edge's measurement)
   /// The matched submap as it was matched against: each keyframe and its pose in the match's frame.
   std::vector<std::pair<size_t, Pose2>> submap;
+  /// An ambiguous match (a rival pose scored nearly as well): the unit
+  /// direction towards the rival in the match's frame. Along it `relative` is
+  /// known only to the ambiguity window, across it as any match.
+  std::optional<Eigen::Vector2d> ambiguous_direction;
 };
 
 class ClosureLedger {

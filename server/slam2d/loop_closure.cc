@@ -211,12 +211,13 @@ void LoopCloser::search(std::vector<Keyframe>& keyframes, size_t query, Trajecto
     for (size_t i = 0; i < submaps_[s].keyframes.size(); ++i)
       members.emplace_back(submaps_[s].keyframes[i], cache_.front().relative[i]);
     Eigen::Matrix3d information = diagonalInformation(options_.loop_sigma_m, options_.loop_sigma_rad);
+    std::optional<Eigen::Vector2d> along;
     if (m->ambiguous()) {
       // Along the rival's direction (anchor frame, the frame of the edge's
       // translation residual) the match is only known to the ambiguity window.
-      const Eigen::Vector2d along = (m->rival_m - m->pose.translation()).normalized();
+      along = (m->rival_m - m->pose.translation()).normalized();
       const double weak = std::pow(options_.loop_sigma_m / options_.ambiguous_sigma_along_m, 2);
-      information.topLeftCorner<2, 2>() -= (1.0 - weak) / std::pow(options_.loop_sigma_m, 2) * along * along.transpose();
+      information.topLeftCorner<2, 2>() -= (1.0 - weak) / std::pow(options_.loop_sigma_m, 2) * *along * along->transpose();
     }
     std::vector<Pending::Tie> ties =
         tiesOf(*m, members, anchor, sparse ? options_.sparse_loop_edge_keyframes : 0, information,
@@ -229,7 +230,8 @@ void LoopCloser::search(std::vector<Keyframe>& keyframes, size_t query, Trajecto
     stats_.ambiguous += m->ambiguous();
     const Pose2 tie_in_anchor = m->pose * ties.front().relative.inverse();
     for (auto& member : members) member.second = tie_in_anchor.inverse() * member.second;
-    pending_.push_back({{query, ties.front().keyframe, m->score, ties.front().relative, std::move(members)}, s,
+    if (along) along = Eigen::Rotation2Dd(-tie_in_anchor.theta_rad) * *along;  // into the tie's frame
+    pending_.push_back({{query, ties.front().keyframe, m->score, ties.front().relative, std::move(members), along}, s,
                         std::move(ties), keyframe_count_, trajectory.travel_m, travel, false});
   }
   stats_.search_s += secondsSince(t0);

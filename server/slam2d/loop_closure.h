@@ -253,6 +253,11 @@ struct LoopClosure2d {
   /// The submap the scan was matched against (match_trajectory's keyframes,
   /// match_pose's among them): a closure can be judged against it as a whole.
   std::vector<SubmapKeyframe> match_submap;
+  /// An ambiguous match (a corridor, repeated structure): the unit direction
+  /// in match_pose's frame along which `relative` is known only to about
+  /// ambiguous_sigma_along_m (its loop edge is weak that way); none for a
+  /// match without a rival.
+  std::optional<Eigen::Vector2d> ambiguous_direction;
 };
 
 /// Counters and timing of the loop closure, for benchmarks.

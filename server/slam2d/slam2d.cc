@@ -439,7 +439,7 @@ std::vector<LoopClosure2d> Slam2d::reported(const std::vector<KeyframeClosure>& 
     std::vector<SubmapKeyframe> submap;
     for (const auto& [k, relative] : c.submap) submap.push_back({keyframes_[k].stamp_ns, relative});
     out.push_back({names_[query.trajectory], query.stamp_ns, query.pose, names_[match.trajectory], match.stamp_ns,
-                   match.pose, c.score, c.relative, std::move(submap)});
+                   match.pose, c.score, c.relative, std::move(submap), c.ambiguous_direction});
   }
   return out;
 }

@@ -73,6 +73,35 @@ TEST(ClosureJudge, AClosureIsFalseBeyondThreeDecimetresOrFiveDegrees) {
   EXPECT_NEAR(r["worst_closure_error_m"].get<double>(), list[2]["error_m"].get<double>(), 1e-12);
 }
 
+// An ambiguous closure (a corridor) measures its relative pose across its
+// rival's direction only: it stays false by the full error, and is also judged
+// across that direction alone.
+TEST(ClosureJudge, AnAmbiguousClosureIsAlsoJudgedAcrossItsRival) {
+  const TenScanRun run;
+  std::vector<slam2d::LoopClosure2d> closures = {
+      run.closure(8, 2, {0.4, 0.0, 0.0}),  // slid 0.4 m along its rival's direction
+      run.closure(7, 1, {0.0, 0.4, 0.0}),  // 0.4 m off across it
+      run.closure(6, 0, {0.4, 0.0, 0.0}),  // slid, and not ambiguous
+  };
+  // The rival's direction in the match's frame: the query's x axis (the error's frame) seen from the match.
+  for (size_t i : {0, 1}) {
+    const slam2d::LoopClosure2d& c = closures[i];
+    closures[i].ambiguous_direction = Eigen::Rotation2Dd(c.relative.theta_rad) * Eigen::Vector2d::UnitX();
+  }
+  const nlohmann::json r = judgeClosures(closures, {}, run.judged, {run.truthJudge("truth")});
+  EXPECT_EQ(r["false_closures"], 3);
+  EXPECT_EQ(r["ambiguous_closures"], 2);
+  EXPECT_EQ(r["false_across_ambiguity"], 2);
+  const nlohmann::json& list = r["list"];
+  EXPECT_TRUE(list[0]["ambiguous"].get<bool>());
+  EXPECT_NEAR(list[0]["error_across_ambiguity_m"].get<double>(), 0.0, 1e-9);
+  EXPECT_FALSE(list[0]["false_across_ambiguity"].get<bool>());
+  EXPECT_NEAR(list[1]["error_across_ambiguity_m"].get<double>(), 0.4, 1e-9);
+  EXPECT_TRUE(list[1]["false_across_ambiguity"].get<bool>());
+  EXPECT_FALSE(list[2]["ambiguous"].get<bool>());
+  EXPECT_FALSE(list[2].contains("error_across_ambiguity_m"));
+}
+
 // Two corrections of one run can disagree on a single scan: each judge's
 // verdict is kept, and a closure counts as false by all only when every
 // judge says so.
