@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <random>
 #include <stdexcept>
 #include <vector>
@@ -264,6 +265,29 @@ Keyframe keyframeOf(const LaserScan& scan, const Pose2& drawn) {
   return kf;
 }
 
+/// What a LoopCloser made of keyframes along a path, once all confirmed.
+struct CloserRun {
+  LoopClosureStats stats;
+  std::vector<LoopCloser::Closure> closures;
+};
+
+/// A LoopCloser fed a keyframe of a SICK-like scan (noise seeded by `seed`)
+/// at each pose of `truth`; `edit(k, keyframe)` may change each before it is added.
+CloserRun closeAlong(const sim::VoxelWorld& world, const LoopClosureOptions& options, const std::vector<Pose2>& truth,
+                     uint64_t seed, const std::function<void(size_t, Keyframe&)>& edit) {
+  LoopCloser closer(options);
+  const sim::Laser2dModel model = sim::Laser2dModel::sickLike();
+  std::mt19937_64 rng(seed);
+  std::vector<Keyframe> keyframes;
+  for (size_t k = 0; k < truth.size(); ++k) {
+    keyframes.push_back(keyframeOf(testing::simScan(world, truth[k], model, rng, int64_t(k) * 100'000'000), truth[k]));
+    edit(k, keyframes.back());
+    closer.addKeyframe(keyframes);
+  }
+  closer.confirmAll();
+  return {closer.stats(), closer.takeClosures()};
+}
+
 // A sparse submap can hold a stretch the front end drew off (a turn on the
 // spot it got some degrees wrong, then right again). A scan matches the
 // submap as a whole, so its pose relative to a keyframe of that stretch
@@ -276,18 +300,9 @@ TEST_F(SimulatedLoop, ClosuresAreNotTiedToKeyframesDrawnOff) {
     LoopClosureOptions options;
     options.sparse_keyframe_spacing_m = 0.0;  // every submap counts as sparse
     options.member_check_exclusion_m = exclusion_m;
-    LoopCloser closer(options);
-    const sim::Laser2dModel model = sim::Laser2dModel::sickLike();
-    std::mt19937_64 rng(37);
-    std::vector<Keyframe> keyframes;
-    for (size_t k = 0; k < truth.size(); ++k) {
-      Pose2 drawn = truth[k];
-      if (k >= off_first && k <= off_last) drawn.theta_rad += 0.15;
-      keyframes.push_back(keyframeOf(testing::simScan(*world_, truth[k], model, rng, int64_t(k) * 100'000'000), drawn));
-      closer.addKeyframe(keyframes);
-    }
-    closer.confirmAll();
-    return closer.takeClosures();
+    return closeAlong(*world_, options, truth, 37, [&](size_t k, Keyframe& kf) {
+             if (k >= off_first && k <= off_last) kf.pose.theta_rad += 0.15;
+           }).closures;
   };
   const auto offStretch = [&](size_t k) { return k >= off_first && k <= off_last; };
   const auto headingError = [&](const LoopCloser::Closure& c) {
@@ -392,10 +407,6 @@ TEST_F(SimulatedLoop, SparseClosuresWaitForAShareOfTheOpenLoop) {
   size_t second_pass = 1;
   while ((truth[second_pass].translation() - truth[0].translation()).norm() > 1e-9) ++second_pass;
   const LoopClosureOptions defaults;
-  struct Run {
-    LoopClosureStats stats;
-    std::vector<LoopCloser::Closure> closures;
-  };
   // views: the second pass's keyframes that keep their match points (empty: all).
   const auto run = [&](double small_correction, double wait_open_fraction, const std::vector<size_t>& views) {
     LoopClosureOptions options;
@@ -404,23 +415,15 @@ TEST_F(SimulatedLoop, SparseClosuresWaitForAShareOfTheOpenLoop) {
     options.small_correction_rad = small_correction;
     options.search_every_keyframes = 1;
     options.support_wait_open_fraction = wait_open_fraction;
-    LoopCloser closer(options);
-    const sim::Laser2dModel model = sim::Laser2dModel::sickLike();
-    std::mt19937_64 rng(38);
-    std::vector<Keyframe> keyframes;
-    for (size_t k = 0; k < truth.size(); ++k) {
-      keyframes.push_back(keyframeOf(testing::simScan(*world_, truth[k], model, rng, int64_t(k) * 100'000'000), truth[k]));
+    return closeAlong(*world_, options, truth, 38, [&](size_t k, Keyframe& kf) {
       if (k >= second_pass && !views.empty() && std::find(views.begin(), views.end(), k) == views.end())
-        keyframes.back().match_points.clear();
-      closer.addKeyframe(keyframes);
-    }
-    closer.confirmAll();
-    return Run{closer.stats(), closer.takeClosures()};
+        kf.match_points.clear();
+    });
   };
   // The two views: with every view searching and waiting for ever, the second
   // pass's first query that closes, and the first more than
   // support_keyframes later that closes against another submap.
-  const Run all_views = run(0.0, 1e9, {});
+  const CloserRun all_views = run(0.0, 1e9, {});
   const auto submapOf = [&](size_t keyframe) { return keyframe / size_t(defaults.submap_keyframes); };
   std::vector<size_t> views;
   size_t first_submap = 0;
@@ -434,12 +437,12 @@ TEST_F(SimulatedLoop, SparseClosuresWaitForAShareOfTheOpenLoop) {
     }
   }
   ASSERT_EQ(views.size(), 2u) << "the second pass did not close twice far enough apart: the test shows nothing";
-  const Run keyframes_only = run(0.0, 0.0, views);
+  const CloserRun keyframes_only = run(0.0, 0.0, views);
   ASSERT_GE(keyframes_only.stats.matches, 2u);
   EXPECT_TRUE(std::none_of(keyframes_only.closures.begin(), keyframes_only.closures.end(),
                            [&](const LoopCloser::Closure& c) { return c.query >= second_pass; }))
       << "the first view gave up its wait before the second came";
-  const Run open_share = run(0.0, defaults.support_wait_open_fraction, views);
+  const CloserRun open_share = run(0.0, defaults.support_wait_open_fraction, views);
   for (const size_t view : views) {
     EXPECT_TRUE(std::any_of(open_share.closures.begin(), open_share.closures.end(),
                             [&](const LoopCloser::Closure& c) { return c.query == view; }))
