@@ -40,6 +40,10 @@ store::LoopClosureRecord toRecord(const LoopClosure& c, int64_t detected_ns) {
   // The body keeps what the store does not index: the poses and the score.
   nlohmann::json body{{"score", c.score}, {"query", placeJson(c.query)}, {"match", placeJson(c.match)}};
   if (c.match_from_query) body["relative_pose"] = poseJson(c.match_from_query);
+  if (c.ambiguous_direction) {
+    const Eigen::Vector3d& d = *c.ambiguous_direction;
+    body["ambiguous_direction"] = {d.x(), d.y(), d.z()};
+  }
   return {0,
           c.map,
           toString(c.source),
@@ -61,8 +65,9 @@ nlohmann::json loopClosureJson(const store::LoopClosureRecord& r) {
           {"detected_ns", r.detected_ns},
           {"query", body.at("query")},
           {"match", body.at("match")},
-          // Closures stored before it was measured have none.
+          // Closures stored before these were measured have neither.
           {"relative_pose", body.value("relative_pose", nlohmann::json(nullptr))},
+          {"ambiguous_direction", body.value("ambiguous_direction", nlohmann::json(nullptr))},
           {"withdrawn_ns", r.withdrawn_ns ? nlohmann::json(*r.withdrawn_ns) : nlohmann::json(nullptr)}};
 }
 

@@ -44,6 +44,11 @@ struct LoopClosure {
   /// The 2D pose graph dropped this closure, reported before, after later
   /// closures showed it wrong: the sink withdraws the stored one.
   bool withdrawn = false;
+  /// A geometry closure from an ambiguous scan-to-submap match (a corridor,
+  /// repeated structure): the unit direction, in the match place's frame,
+  /// along which match_from_query is known only to about a metre (the pose
+  /// graph holds it weakly that way); none for any other closure.
+  std::optional<Eigen::Vector3d> ambiguous_direction;
 };
 
 /// Takes accepted loop closures and withdrawals (store, viewers, metrics).
@@ -55,7 +60,9 @@ store::LoopClosureRecord toRecord(const LoopClosure& closure, int64_t detected_n
 /// query and match as {robot_id, stamp_ns, position [x,y,z] m, orientation [w,x,y,z]}
 /// (position and orientation null when the pose is unknown), relative_pose
 /// {position, orientation} (match_from_query; null when not measured), and
-/// withdrawn_ns (null while the closure holds).
+/// withdrawn_ns (null while the closure holds) and ambiguous_direction
+/// ([x,y,z], unit, in the match place's frame; null for a closure that is
+/// not ambiguous).
 /// @throws nlohmann::json::exception when the stored body is not JSON
 nlohmann::json loopClosureJson(const store::LoopClosureRecord& record);
 

@@ -334,9 +334,11 @@ void MapWorker::postClosures(const std::vector<slam2d::LoopClosure2d>& accepted,
                              const std::vector<slam2d::LoopClosure2d>& withdrawn) {
   // Stored by the feed's thread: a durable write per closure would hold this worker's acks back.
   const auto post = [&](const slam2d::LoopClosure2d& c, bool is_withdrawn) {
+    std::optional<Eigen::Vector3d> ambiguous_direction;
+    if (c.ambiguous_direction) ambiguous_direction = Eigen::Vector3d(c.ambiguous_direction->x(), c.ambiguous_direction->y(), 0.0);
     loop_feed_->post({name_, LoopSource::kGeometry, {c.query_trajectory, c.query_stamp_ns, slam2d::planarIsometry(c.query_pose)},
                       {c.match_trajectory, c.match_stamp_ns, slam2d::planarIsometry(c.match_pose)}, c.score,
-                      slam2d::planarIsometry(c.relative), is_withdrawn});
+                      slam2d::planarIsometry(c.relative), is_withdrawn, ambiguous_direction});
   };
   for (const slam2d::LoopClosure2d& c : accepted) post(c, false);
   for (const slam2d::LoopClosure2d& c : withdrawn) post(c, true);

@@ -222,6 +222,13 @@ TEST(LoopClosure, TwoRobotsCrossingOnOneMapCloseALoopAndTheirTrajectoriesAreCorr
     ++by_source[source];
     if (source == "geometry") {
       EXPECT_TRUE(c["relative_pose"].is_object()) << c;
+      const nlohmann::json& along = c.at("ambiguous_direction");  // a unit planar vector, or null
+      if (!along.is_null()) {
+        EXPECT_NEAR(std::hypot(along[0].get<double>(), along[1].get<double>()), 1.0, 1e-9) << c;
+        EXPECT_EQ(along[2].get<double>(), 0.0) << c;
+      }
+    } else {
+      EXPECT_TRUE(c["ambiguous_direction"].is_null()) << c;
     }
     if (c["relative_pose"].is_object()) {
       if (const auto q = truthOf(c["query"]), m = truthOf(c["match"]); q && m) {

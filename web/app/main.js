@@ -491,6 +491,12 @@ function renderLoops() {
     offset.className = 'num loop-offset';
     offset.textContent = measuredOffsetText(lc.event.relative_pose);
     offset.title = 'measured relative pose: the newer place from the older one';
+    // An ambiguous match (a corridor): the offset holds only across this direction.
+    const along = lc.event.ambiguous_direction;
+    if (along && offset.textContent) {
+      offset.textContent += ' ↔';
+      offset.title += `; ambiguous: known only to about a metre along (${along[0].toFixed(2)}, ${along[1].toFixed(2)}) of the older place's frame`;
+    }
     const when = document.createElement('span');
     when.className = 'num';
     const stamp = lc.event.query?.stamp_ns ?? lc.event.detected_ns;

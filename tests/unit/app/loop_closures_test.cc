@@ -32,6 +32,11 @@ TEST(LoopClosures, TheJsonCarriesBothPlacesAndTheMeasuredRelativePoseWhenThereIs
   const nlohmann::json& q = json["relative_pose"]["orientation"];  // [w, x, y, z]
   EXPECT_NEAR(q[0].get<double>(), std::cos(0.1), 1e-12);
   EXPECT_NEAR(q[3].get<double>(), std::sin(0.1), 1e-12);
+  EXPECT_TRUE(json["ambiguous_direction"].is_null());
+
+  closure.ambiguous_direction = Eigen::Vector3d(0.6, -0.8, 0.0);
+  json = loopClosureJson(toRecord(closure, 999));
+  EXPECT_EQ(json["ambiguous_direction"], nlohmann::json::array({0.6, -0.8, 0.0}));
 }
 
 TEST(LoopClosures, SourcesParseByTheirApiNames) {

@@ -203,6 +203,34 @@ TEST_F(SimulatedLoop, ScansWithTooFewPointsAndWeakAmbiguousMatchesCloseNothing) 
 // tied to the submap's keyframes nearest the matched pose and reported against
 // the nearest; with sparse_loop_edge_keyframes 0, against the anchor (the
 // middle keyframe). Either way the reported relative pose is the true one.
+// With a wide ambiguity margin the tour's matches find rivals: each closure
+// from such a match reports a unit direction (towards its rival), the others
+// none; without the ambiguity check no closure has one.
+TEST_F(SimulatedLoop, AnAmbiguousClosureReportsTheDirectionItLeavesOpen) {
+  const std::vector<Pose2> truth = outAndAgain();
+  const auto closures = [&](double ambiguity_margin) {
+    Slam2dOptions options;
+    options.loop_closure.submap.ambiguity_margin = ambiguity_margin;
+    options.loop_closure.ambiguous_min_score = 0.0;
+    Slam2d slam = drive(options, truth, truth, 35);
+    slam.confirmLoopClosures();
+    return slam.takeLoopClosures();
+  };
+  const std::vector<LoopClosure2d> checked = closures(0.5);
+  ASSERT_FALSE(checked.empty());
+  size_t ambiguous = 0;
+  for (const LoopClosure2d& c : checked) {
+    if (!c.ambiguous_direction) continue;
+    ++ambiguous;
+    EXPECT_NEAR(c.ambiguous_direction->norm(), 1.0, 1e-9);
+  }
+  EXPECT_GT(ambiguous, 0u) << "the wide margin must make some closure ambiguous";
+
+  const std::vector<LoopClosure2d> unchecked = closures(0.0);
+  ASSERT_FALSE(unchecked.empty());
+  for (const LoopClosure2d& c : unchecked) EXPECT_FALSE(c.ambiguous_direction.has_value());
+}
+
 TEST_F(SimulatedLoop, SparseSubmapClosuresAreTiedWhereTheScanMatched) {
   const std::vector<Pose2> truth = outAndAgain();
   const auto closures = [&](int tied_keyframes) {
