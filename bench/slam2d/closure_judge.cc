@@ -33,6 +33,29 @@ std::optional<Pose2> ClosureJudge::referenceOf(std::optional<size_t> input, cons
   return *reference[*j] * between(laser_poses[*j], laser_poses[*input]);
 }
 
+std::vector<Eigen::Vector2d> scanReturns(const slam2d::LaserScan& scan) {
+  std::vector<Eigen::Vector2d> points;
+  for (size_t i = 0; i < scan.ranges_m.size() && i < scan.angles_rad.size(); ++i) {
+    const float r = scan.ranges_m[i];
+    if (!std::isfinite(r) || r <= 0.0f || r < scan.range_min_m || (scan.range_max_m > 0.0f && r >= scan.range_max_m))
+      continue;
+    points.emplace_back(r * std::cos(scan.angles_rad[i]), r * std::sin(scan.angles_rad[i]));
+  }
+  return points;
+}
+
+double scanFit_m(const std::vector<Eigen::Vector2d>& points, const Pose2& pose, const std::vector<Eigen::Vector2d>& map) {
+  if (points.empty() || map.empty()) return kScanFitTruncation_m;
+  double sum = 0.0;
+  for (const Eigen::Vector2d& p : points) {
+    const Eigen::Vector2d placed = pose * p;
+    double nearest2 = kScanFitTruncation_m * kScanFitTruncation_m;
+    for (const Eigen::Vector2d& m : map) nearest2 = std::min(nearest2, (m - placed).squaredNorm());
+    sum += std::sqrt(nearest2);
+  }
+  return sum / double(points.size());
+}
+
 std::unordered_map<int64_t, size_t> uniqueStampIndex(const std::vector<int64_t>& stamps_ns) {
   std::unordered_map<int64_t, size_t> index;
   constexpr size_t kShared = std::numeric_limits<size_t>::max();
@@ -127,6 +150,24 @@ std::optional<Pose2> submapAnchor(const slam2d::LoopClosure2d& c, std::optional<
   return Pose2{a.translation.x(), a.translation.y(), a.rotation_rad};
 }
 
+/// The judge's scans around `match` (kScanFitNeighbours either way) in its
+/// laser frame of `match`, placed by the judge's poses; without the scans
+/// as near `query`, which would hold the query's own view of the place.
+std::vector<Eigen::Vector2d> judgeLocalMap(size_t match, const Pose2& judge_match, size_t query, const JudgedRun& run,
+                                           const ClosureJudge& judge) {
+  std::vector<Eigen::Vector2d> map;
+  const auto near = [](size_t a, size_t b, size_t within) { return (a > b ? a - b : b - a) <= within; };
+  const size_t first = match > kScanFitNeighbours ? match - kScanFitNeighbours : 0;
+  for (size_t k = first; k <= match + kScanFitNeighbours && k < run.scan_points.size(); ++k) {
+    if (near(k, query, kScanFitNeighbours)) continue;
+    const std::optional<Pose2> at = judge.referenceOf(k, run.laser_poses);
+    if (!at) continue;
+    const Pose2 in_match = between(judge_match, *at);
+    for (const Eigen::Vector2d& p : run.scan_points[k]) map.push_back(in_match * p);
+  }
+  return map;
+}
+
 }  // namespace
 
 json judgeClosures(const std::vector<slam2d::LoopClosure2d>& closures,
@@ -152,6 +193,8 @@ json judgeClosures(const std::vector<slam2d::LoopClosure2d>& closures,
   std::vector<size_t> judged(judges.size(), 0), wrong(judges.size(), 0), wrong_withdrawn(judges.size(), 0);
   std::vector<size_t> judged_submap(judges.size(), 0), wrong_submap(judges.size(), 0);
   std::vector<size_t> wrong_across(judges.size(), 0);
+  std::vector<size_t> wrong_confirmed(judges.size(), 0), wrong_across_confirmed(judges.size(), 0);
+  const bool scan_check = !run.scan_points.empty();
   size_t ambiguous = 0;
   std::vector<double> worst_m(judges.size(), 0.0);
   size_t cross = 0, judged_by_all = 0, wrong_by_all = 0;
@@ -200,6 +243,16 @@ json judgeClosures(const std::vector<slam2d::LoopClosure2d>& closures,
         verdict.update({{"error_across_ambiguity_m", across_m}, {"false_across_ambiguity", wrong_across_here}});
       }
       wrong_across[j] += wrong_across_here;
+      if (scan_check && (is_wrong || wrong_across_here)) {
+        const std::vector<Eigen::Vector2d> local_map = judgeLocalMap(*match, *rm, *query, run, judges[j]);
+        const double closure_fit_m = scanFit_m(run.scan_points[*query], measured, local_map);
+        const double judge_fit_m = scanFit_m(run.scan_points[*query], between(*rm, *rq), local_map);
+        const bool confirmed = judge_fit_m <= closure_fit_m;
+        wrong_confirmed[j] += is_wrong && confirmed;
+        wrong_across_confirmed[j] += wrong_across_here && confirmed;
+        verdict.update({{"scan_fit_closure_m", closure_fit_m}, {"scan_fit_judge_m", judge_fit_m},
+                        {"confirmed_by_scans", confirmed}});
+      }
       if (const std::optional<Pose2> anchor = submapAnchor(c, match, inputOf, run, judges[j])) {
         const Pose2 es = between(between(*anchor, *rq), measured);
         const bool submap_wrong =
@@ -247,6 +300,9 @@ json judgeClosures(const std::vector<slam2d::LoopClosure2d>& closures,
                          {"closures_judged_against_submap", judged_submap[j]},
                          {"false_against_submap", wrong_submap[j]},
                          {"false_across_ambiguity", wrong_across[j]},
+                         {"false_confirmed_by_scans", scan_check ? json(wrong_confirmed[j]) : json(nullptr)},
+                         {"false_across_ambiguity_confirmed_by_scans",
+                          scan_check ? json(wrong_across_confirmed[j]) : json(nullptr)},
                          {"worst_closure_error_m", judged[j] > 0 ? json(worst_m[j]) : json(nullptr)},
                          {"judge_poses_contradicted", contradicted[j]}});
   const bool first = !judges.empty() && judged.front() > 0;
@@ -261,6 +317,9 @@ json judgeClosures(const std::vector<slam2d::LoopClosure2d>& closures,
           {"false_against_submap", first ? json(wrong_submap.front()) : json(nullptr)},
           {"ambiguous_closures", ambiguous},
           {"false_across_ambiguity", first ? json(wrong_across.front()) : json(nullptr)},
+          {"false_confirmed_by_scans", first && scan_check ? json(wrong_confirmed.front()) : json(nullptr)},
+          {"false_across_ambiguity_confirmed_by_scans",
+           first && scan_check ? json(wrong_across_confirmed.front()) : json(nullptr)},
           {"judged_by", judges.empty() ? json(nullptr) : json(judges.front().judged_by)},
           {"judge_poses_contradicted", judges.empty() ? json(nullptr) : json(contradicted.front())},
           {"judges", per_judge},

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <Eigen/Core>
 #include <cstdint>
 #include <nlohmann/json.hpp>
 #include <numbers>
@@ -9,6 +10,7 @@
 #include <vector>
 
 #include "datasets/slam_relations.h"
+#include "slam2d/laser_scan.h"
 #include "slam2d/loop_closure.h"
 #include "slam2d/pose2.h"
 
@@ -53,7 +55,28 @@ struct JudgedRun {
   std::vector<int64_t> stamps_ns;            ///< per input scan; closures name their scans by stamp
   std::vector<slam2d::Pose2> sensor_mounts;  ///< per input scan, robot → laser
   std::vector<slam2d::Pose2> laser_poses;    ///< per input scan, the final estimate
+  /// Per input scan, its returns in the laser frame (m), for the scan check
+  /// of a false verdict (scanFit_m); empty: no scan check.
+  std::vector<std::vector<Eigen::Vector2d>> scan_points;
 };
+
+/// How far a scan's ends are truncated when it is fitted to a local map (m).
+constexpr double kScanFitTruncation_m = 0.3;
+/// The judge's local map around a closure's match: its scans this many
+/// input scans either way, placed by the judge's poses (without those as
+/// near the query).
+constexpr size_t kScanFitNeighbours = 15;
+
+/// The returns of `scan` (finite, within its range limits and below
+/// range_max_m: a return at the maximum is none) in the laser frame (m).
+std::vector<Eigen::Vector2d> scanReturns(const slam2d::LaserScan& scan);
+
+/// Mean distance (m) from each of `points` placed at `pose` to its nearest
+/// point of `map`, each truncated at kScanFitTruncation_m: how well a scan
+/// fits a local map at that pose (lower is better; kScanFitTruncation_m when
+/// `points` or `map` is empty). Brute force: for the few closures judged false.
+double scanFit_m(const std::vector<Eigen::Vector2d>& points, const slam2d::Pose2& pose,
+                 const std::vector<Eigen::Vector2d>& map);
 
 /// Marks the judge's poses that `relations` contradict (the poses referenceOf
 /// borrows for both scans of a relation they miss by more than
@@ -89,7 +112,17 @@ size_t markContradictedPoses(ClosureJudge& judge, const std::vector<datasets::Sl
 ///         (each judge's counts, also closures_judged_against_submap,
 ///         false_against_submap and false_across_ambiguity);
 ///         closures_judged_by_all and false_by_all_judges (with two judges or
-///         more, else null); list (each closure with `withdrawn` and
+///         more, else null);
+///         with run.scan_points, the scan check of each false verdict: the
+///         query's scan fitted (scanFit_m) to the judge's local map of the
+///         match (its scans kScanFitNeighbours either way, by the judge's
+///         poses, none as near the query) at the closure's relative pose and at the judge's. A
+///         corrected log can be off along a corridor (infinite-corridor,
+///         BENCHMARKS.md §4), and a closure whose pose fits the scans better
+///         than the judge's is not shown false by it. false_confirmed_by_scans
+///         and false_across_ambiguity_confirmed_by_scans (null without scans)
+///         count the false ones whose judge's pose fits at least as well; in
+///         the list scan_fit_closure_m, scan_fit_judge_m, confirmed_by_scans; list (each closure with `withdrawn` and
 ///         `ambiguous`, the first judge's errors — error_across_ambiguity_m
 ///         and false_across_ambiguity for an ambiguous one, submap_error_m, submap_error_deg and
 ///         false_against_submap where the submap had 3 keyframes with a

@@ -178,10 +178,11 @@ RunClosures takeClosures(slam2d::Slam2d& slam) {
 }
 
 JudgedRun judgedRun(const std::vector<Slam2dInput>& inputs, const std::vector<Pose2>& laser_poses) {
-  JudgedRun run{{}, {}, laser_poses};
+  JudgedRun run{{}, {}, laser_poses, {}};
   for (const Slam2dInput& in : inputs) {
     run.stamps_ns.push_back(in.scan.stamp_ns);
     run.sensor_mounts.push_back(in.scan.sensor_mount);
+    run.scan_points.push_back(scanReturns(in.scan));
   }
   return run;
 }
@@ -279,12 +280,12 @@ json revisitJson(const std::vector<Slam2dInput>& inputs, const std::vector<slam2
 /// The closure counts each run of --repeat reports (keys of judgeClosures' JSON).
 constexpr const char* kRunClosureKeys[] = {"closures", "closures_judged", "false_closures", "false_against_submap",
                                            "false_across_ambiguity", "ambiguous_closures", "false_by_all_judges",
-                                           "closures_judged_by_relations", "false_by_relations"};
+                                           "closures_judged_by_relations", "false_by_relations",
+                                           "false_confirmed_by_scans", "false_across_ambiguity_confirmed_by_scans"};
 
 /// Runs 2..n of --repeat: the run from n − 1 other starts (seeded, so reproducible), each
 /// scored as the headline run is. @return JSON: runs [{start, ate_m, rpe_1m_m, rel_trans_err_m,
-/// closures, closures_judged, false_closures, false_against_submap, false_by_all_judges,
-/// closures_judged_by_relations, false_by_relations, revisit_residual_m, cpu_s}] (the first
+/// the closure counts (kRunClosureKeys), revisit_residual_m, cpu_s}] (the first
 /// is `first_run`) and the median, min and max of ATE and of the revisit residual over all n runs
 json repeatedRuns(const Slam2dBenchOptions& options, const Slam2dDataset& data, const std::vector<slam2d::LaserScan>& scans,
                   const std::vector<ClosureJudge>& judges, const json& first_run) {
@@ -325,6 +326,10 @@ json repeatedRuns(const Slam2dBenchOptions& options, const Slam2dDataset& data, 
       if (!one["false_by_relations"].is_null())
         std::printf("; by the relations %zu of %zu false", one["false_by_relations"].get<size_t>(),
                     one["closures_judged_by_relations"].get<size_t>());
+      if (!one["false_confirmed_by_scans"].is_null())
+        std::printf("; the scans confirm %zu false (%zu with the ambiguous judged across their rival)",
+                    one["false_confirmed_by_scans"].get<size_t>(),
+                    one["false_across_ambiguity_confirmed_by_scans"].get<size_t>());
     }
     std::printf(", %.1f s CPU\n", run.cpu_s);
     runs.push_back(std::move(one));
@@ -479,6 +484,11 @@ int runSlam2dBench(const Slam2dBenchOptions& options) {
                   j["worst_closure_error_m"].is_null() ? 0.0 : j["worst_closure_error_m"].get<double>(),
                   j["false_against_submap"].get<size_t>(), j["closures_judged_against_submap"].get<size_t>(),
                   j["false_across_ambiguity"].get<size_t>(), lc_json["ambiguous_closures"].get<size_t>());
+      if (!j["false_confirmed_by_scans"].is_null())
+        std::printf("    of the false, the scans fit the judge's pose at least as well as the closure's for %zu (%zu "
+                    "with the ambiguous judged across their rival)\n",
+                    j["false_confirmed_by_scans"].get<size_t>(),
+                    j["false_across_ambiguity_confirmed_by_scans"].get<size_t>());
     }
     if (!lc_json["false_by_relations"].is_null())
       std::printf("  %zu judged by the relations chained from match to query: %zu false, worst %.3f m\n",

@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <numbers>
+#include <random>
 
 namespace rmap::bench {
 namespace {
@@ -105,6 +106,76 @@ TEST(ClosureJudge, AnAmbiguousClosureIsAlsoJudgedAcrossItsRival) {
 // Two corrections of one run can disagree on a single scan: each judge's
 // verdict is kept, and a closure counts as false by all only when every
 // judge says so.
+// A false verdict is checked against the scans: the query's scan fitted to
+// the judge's local map of the match. Where the judge's own pose is off (a
+// corrected log off along a corridor), the closure's pose fits better and the
+// verdict is not confirmed; a closure truly off is.
+TEST(ClosureJudge, TheScansShowWhetherAFalseVerdictIsTheJudgesError) {
+  // 40 scans 0.25 m apart, out along x and back; each sees the same scattered landmarks.
+  std::mt19937 random(7);
+  std::uniform_real_distribution<double> along(-3.0, 8.0), across(-4.0, 4.0);
+  std::vector<Eigen::Vector2d> landmarks;
+  for (int i = 0; i < 300; ++i) landmarks.emplace_back(along(random), across(random));
+  JudgedRun run;
+  for (int i = 0; i < 40; ++i) {
+    const Pose2 laser = i < 20 ? Pose2{0.25 * i, 0.0, 0.0} : Pose2{0.25 * (39 - i), 0.1, std::numbers::pi};
+    run.stamps_ns.push_back(1000 + i);
+    run.sensor_mounts.push_back({});
+    run.laser_poses.push_back(laser);
+    std::vector<Eigen::Vector2d> seen;
+    for (const Eigen::Vector2d& l : landmarks) seen.push_back(laser.inverse() * l);
+    run.scan_points.push_back(std::move(seen));
+  }
+  const auto closure = [&](size_t query, size_t match, const Pose2& error) {
+    slam2d::LoopClosure2d c;
+    c.query_stamp_ns = run.stamps_ns[query];
+    c.match_stamp_ns = run.stamps_ns[match];
+    c.relative = between(run.laser_poses[match], run.laser_poses[query]) * error;
+    return c;
+  };
+  ClosureJudge judge{"off at scan 39", std::vector<std::optional<Pose2>>(run.laser_poses.begin(), run.laser_poses.end()), {}};
+  judge.reference[39] = *judge.reference[39] * Pose2{0.4, 0.0, 0.0};
+  const std::vector<slam2d::LoopClosure2d> closures = {closure(39, 0, {}), closure(38, 1, {0.4, 0.0, 0.0})};
+
+  const nlohmann::json r = judgeClosures(closures, {}, run, {judge});
+  EXPECT_EQ(r["false_closures"], 2);
+  EXPECT_EQ(r["false_confirmed_by_scans"], 1);
+  EXPECT_EQ(r["false_across_ambiguity_confirmed_by_scans"], 1);
+  const nlohmann::json& list = r["list"];
+  ASSERT_EQ(list.size(), 2u);
+  EXPECT_TRUE(list[0]["false"].get<bool>()) << "the judge's pose of scan 39 is 0.4 m off";
+  EXPECT_FALSE(list[0]["confirmed_by_scans"].get<bool>());
+  EXPECT_LT(list[0]["scan_fit_closure_m"].get<double>(), 1e-9);
+  EXPECT_GT(list[0]["scan_fit_judge_m"].get<double>(), 0.1);
+  EXPECT_TRUE(list[1]["false"].get<bool>());
+  EXPECT_TRUE(list[1]["confirmed_by_scans"].get<bool>());
+  EXPECT_LT(list[1]["scan_fit_judge_m"].get<double>(), 1e-9);
+  EXPECT_GT(list[1]["scan_fit_closure_m"].get<double>(), 0.1);
+
+  run.scan_points.clear();  // no scans: no check
+  const nlohmann::json unchecked = judgeClosures(closures, {}, run, {judge});
+  EXPECT_EQ(unchecked["false_closures"], 2);
+  EXPECT_TRUE(unchecked["false_confirmed_by_scans"].is_null());
+  EXPECT_FALSE(unchecked["list"][0].contains("confirmed_by_scans"));
+}
+
+TEST(ClosureJudge, ScanFitIsTheMeanTruncatedDistanceToTheNearestMapPoint) {
+  const std::vector<Eigen::Vector2d> map = {{0.0, 0.0}, {1.0, 0.0}};
+  const std::vector<Eigen::Vector2d> points = {{0.0, 0.1}, {5.0, 5.0}};
+  EXPECT_NEAR(scanFit_m(points, {}, map), (0.1 + kScanFitTruncation_m) / 2, 1e-12);
+  EXPECT_NEAR(scanFit_m(points, {1.0, -0.1, 0.0}, map), (0.0 + kScanFitTruncation_m) / 2, 1e-12);
+  EXPECT_EQ(scanFit_m({}, {}, map), kScanFitTruncation_m);
+  slam2d::LaserScan scan;
+  scan.range_min_m = 0.1f;
+  scan.range_max_m = 10.0f;
+  scan.angles_rad = {0.0f, float(std::numbers::pi / 2), 0.0f, 0.0f, 0.0f};
+  scan.ranges_m = {2.0f, 1.0f, 10.0f, 0.05f, std::nanf("")};
+  const std::vector<Eigen::Vector2d> returns = scanReturns(scan);
+  ASSERT_EQ(returns.size(), 2u) << "the maximum, below the minimum and NaN are no returns";
+  EXPECT_NEAR((returns[0] - Eigen::Vector2d(2.0, 0.0)).norm(), 0.0, 1e-6);
+  EXPECT_NEAR((returns[1] - Eigen::Vector2d(0.0, 1.0)).norm(), 0.0, 1e-6);
+}
+
 TEST(ClosureJudge, EachJudgeGivesItsVerdict) {
   const TenScanRun run;
   ClosureJudge skewed = run.truthJudge("skewed");
