@@ -185,6 +185,8 @@ int main(int argc, char** argv) {
   d->add_option("--loop-support-wait-open-fraction", slam2d.slam.loop_closure.support_wait_open_fraction,
                 "on a sparse trajectory a loop closure that needs support also waits this fraction of the distance "
                 "travelled without a closure before it (0: keyframes only)");
+  d->add_option("--loop-sparse-support-max-keyframes", slam2d.slam.loop_closure.sparse_support_max_keyframes,
+                "on a sparse trajectory the most keyframes a loop closure waits for support");
   d->add_option("--max-loop-error-m", slam2d.slam.loop_closure.max_loop_error_m,
                 "a loop edge still off by more than this (m) after an optimisation is disabled");
   d->add_option("--loop-ambiguity-margin", slam2d.slam.loop_closure.submap.ambiguity_margin,

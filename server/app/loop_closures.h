@@ -48,7 +48,7 @@ struct LoopClosure {
   /// repeated structure): the unit direction, in the match place's frame,
   /// along which match_from_query is known only to about a metre (the pose
   /// graph holds it weakly that way); none for any other closure.
-  std::optional<Eigen::Vector3d> ambiguous_direction;
+  std::optional<Eigen::Vector3d> ambiguous_direction{};
 };
 
 /// Takes accepted loop closures and withdrawals (store, viewers, metrics).

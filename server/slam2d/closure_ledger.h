@@ -30,7 +30,7 @@ struct KeyframeClosure {
   /// An ambiguous match (a rival pose scored nearly as well): the unit
   /// direction towards the rival in the match's frame. Along it `relative` is
   /// known only to the ambiguity window, across it as any match.
-  std::optional<Eigen::Vector2d> ambiguous_direction;
+  std::optional<Eigen::Vector2d> ambiguous_direction{};
 };
 
 class ClosureLedger {

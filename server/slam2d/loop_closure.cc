@@ -56,6 +56,8 @@ void LoopClosureOptions::validate() const {
   requireLoopOption(nonNegative(small_correction_m) && nonNegative(small_correction_rad), "small_correction_* must be ≥ 0");
   requireLoopOption(support_keyframes >= 0, "support_keyframes must be ≥ 0");
   requireLoopOption(nonNegative(support_wait_open_fraction), "support_wait_open_fraction must be ≥ 0");
+  requireLoopOption(sparse_support_max_keyframes >= support_keyframes,
+                    "sparse_support_max_keyframes must be ≥ support_keyframes");
   requireLoopOption(nonNegative(support_tolerance_m) && nonNegative(support_tolerance_rad), "support_tolerance_* must be ≥ 0");
   requireLoopOption(nonNegative(support_min_separation_m), "support_min_separation_m must be ≥ 0");
   requireLoopOption(optimize_every_keyframes >= 1, "optimize_every_keyframes must be ≥ 1");
@@ -380,7 +382,9 @@ bool LoopCloser::awaitsSupport(const Pending& p, const std::vector<Keyframe>& ke
   // loop before the query: the longer the drift, the fewer views match.
   const TrajectoryState& t = trajectories_[keyframes[p.closure.query].trajectory];
   const double since_query_m = t.travel_m - p.query_travel_m;
-  if (t.sparse(options_.sparse_keyframe_spacing_m)) return since_query_m < options_.support_wait_open_fraction * p.open_travel_m;
+  if (t.sparse(options_.sparse_keyframe_spacing_m))
+    return since_query_m < options_.support_wait_open_fraction * p.open_travel_m &&
+           waited <= static_cast<uint64_t>(options_.sparse_support_max_keyframes);
   return since_query_m < 2.0 * options_.support_min_separation_m &&
          waited <= 4 * static_cast<uint64_t>(options_.support_keyframes);
 }

@@ -165,6 +165,13 @@ struct LoopClosureOptions {
   /// intel kept no false closure from 30 starts (BENCHMARKS.md §4).
   /// 0: support_keyframes only.
   double support_wait_open_fraction = 0.3;
+  /// The most keyframes that wait lasts (≥ support_keyframes): turning on the
+  /// spot makes keyframes without travel, and each waiting closure is checked
+  /// against every other. Campus needs more than 40 (at 40 its median ATE
+  /// went 0.304 → 0.397 m, one start lost); 100 changed no start of campus or
+  /// infinite-corridor, and 300 leaves room for open loops of about 1 km
+  /// with keyframes 1 m apart (BENCHMARKS.md §4).
+  int sparse_support_max_keyframes = 300;
   double support_tolerance_m = 0.15;   ///< two closures agree when their corrections differ by less
   double support_tolerance_rad = 0.05;
   /// On a dense trajectory (keyframes closer than sparse_keyframe_spacing_m
@@ -257,7 +264,7 @@ struct LoopClosure2d {
   /// in match_pose's frame along which `relative` is known only to about
   /// ambiguous_sigma_along_m (its loop edge is weak that way); none for a
   /// match without a rival.
-  std::optional<Eigen::Vector2d> ambiguous_direction;
+  std::optional<Eigen::Vector2d> ambiguous_direction{};
 };
 
 /// Counters and timing of the loop closure, for benchmarks.

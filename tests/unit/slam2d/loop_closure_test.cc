@@ -436,8 +436,10 @@ TEST_F(SimulatedLoop, SparseClosuresWaitForAShareOfTheOpenLoop) {
   while ((truth[second_pass].translation() - truth[0].translation()).norm() > 1e-9) ++second_pass;
   const LoopClosureOptions defaults;
   // views: the second pass's keyframes that keep their match points (empty: all).
-  const auto run = [&](double small_correction, double wait_open_fraction, const std::vector<size_t>& views) {
+  const auto run = [&](double small_correction, double wait_open_fraction, const std::vector<size_t>& views,
+                       int max_keyframes = LoopClosureOptions{}.sparse_support_max_keyframes) {
     LoopClosureOptions options;
+    options.sparse_support_max_keyframes = max_keyframes;
     options.sparse_keyframe_spacing_m = 0.0;  // every trajectory counts as sparse
     options.small_correction_m = small_correction;
     options.small_correction_rad = small_correction;
@@ -465,11 +467,16 @@ TEST_F(SimulatedLoop, SparseClosuresWaitForAShareOfTheOpenLoop) {
     }
   }
   ASSERT_EQ(views.size(), 2u) << "the second pass did not close twice far enough apart: the test shows nothing";
+  const auto secondPassCloses = [&](const CloserRun& r) {
+    return std::any_of(r.closures.begin(), r.closures.end(),
+                       [&](const LoopCloser::Closure& c) { return c.query >= second_pass; });
+  };
   const CloserRun keyframes_only = run(0.0, 0.0, views);
   ASSERT_GE(keyframes_only.stats.matches, 2u);
-  EXPECT_TRUE(std::none_of(keyframes_only.closures.begin(), keyframes_only.closures.end(),
-                           [&](const LoopCloser::Closure& c) { return c.query >= second_pass; }))
-      << "the first view gave up its wait before the second came";
+  EXPECT_FALSE(secondPassCloses(keyframes_only)) << "the first view gave up its wait before the second came";
+  // The wait in travel is bounded in keyframes too (turning on the spot travels nothing).
+  const CloserRun capped = run(0.0, defaults.support_wait_open_fraction, views, defaults.support_keyframes);
+  EXPECT_FALSE(secondPassCloses(capped)) << "the first view waited past sparse_support_max_keyframes";
   const CloserRun open_share = run(0.0, defaults.support_wait_open_fraction, views);
   for (const size_t view : views) {
     EXPECT_TRUE(std::any_of(open_share.closures.begin(), open_share.closures.end(),
@@ -511,6 +518,7 @@ TEST(LoopClosureOptions, BadOptionsThrow) {
   throws([](LoopClosureOptions& o) { o.support_min_separation_m = -1.0; });
   throws([](LoopClosureOptions& o) { o.support_wait_open_fraction = -0.1; });
   throws([](LoopClosureOptions& o) { o.support_wait_open_fraction = NAN; });
+  throws([](LoopClosureOptions& o) { o.sparse_support_max_keyframes = o.support_keyframes - 1; });
   // Off, options are still checked: turning it on later must not be the first time they are.
   throws([](LoopClosureOptions& o) {
     o.enabled = false;
