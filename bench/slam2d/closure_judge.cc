@@ -243,7 +243,7 @@ json judgeClosures(const std::vector<slam2d::LoopClosure2d>& closures,
         verdict.update({{"error_across_ambiguity_m", across_m}, {"false_across_ambiguity", wrong_across_here}});
       }
       wrong_across[j] += wrong_across_here;
-      if (scan_check && (is_wrong || wrong_across_here)) {
+      if (scan_check && is_wrong) {  // wrong across a rival is wrong in full too
         const std::vector<Eigen::Vector2d> local_map = judgeLocalMap(*match, *rm, *query, run, judges[j]);
         const double closure_fit_m = scanFit_m(run.scan_points[*query], measured, local_map);
         const double judge_fit_m = scanFit_m(run.scan_points[*query], between(*rm, *rq), local_map);

@@ -116,13 +116,15 @@ size_t markContradictedPoses(ClosureJudge& judge, const std::vector<datasets::Sl
 ///         with run.scan_points, the scan check of each false verdict: the
 ///         query's scan fitted (scanFit_m) to the judge's local map of the
 ///         match (its scans kScanFitNeighbours either way, by the judge's
-///         poses, none as near the query) at the closure's relative pose and at the judge's. A
-///         corrected log can be off along a corridor (infinite-corridor,
-///         BENCHMARKS.md §4), and a closure whose pose fits the scans better
-///         than the judge's is not shown false by it. false_confirmed_by_scans
-///         and false_across_ambiguity_confirmed_by_scans (null without scans)
-///         count the false ones whose judge's pose fits at least as well; in
-///         the list scan_fit_closure_m, scan_fit_judge_m, confirmed_by_scans; list (each closure with `withdrawn` and
+///         poses, none as near the query) at the closure's relative pose
+///         and at the judge's. A corrected log can be off along a corridor
+///         (infinite-corridor, BENCHMARKS.md §4), and a closure whose pose
+///         fits the scans better than the judge's is not shown false by it.
+///         false_confirmed_by_scans and
+///         false_across_ambiguity_confirmed_by_scans (null without scans)
+///         count the false ones whose judge's pose fits at least as well
+///         (scan_fit_closure_m, scan_fit_judge_m and confirmed_by_scans in
+///         the list); list (each closure with `withdrawn` and
 ///         `ambiguous`, the first judge's errors — error_across_ambiguity_m
 ///         and false_across_ambiguity for an ambiguous one, submap_error_m, submap_error_deg and
 ///         false_against_submap where the submap had 3 keyframes with a
