@@ -132,6 +132,8 @@ int main(int argc, char** argv) {
                 "without odometry, a searched pose's score is weighed by exp(-w·Δθ²) (1/rad²)");
   d->add_option("--search-after-step-heading-weight", slam2d.slam.search_after_large_step_heading_weight,
                 "the search after a large odometry step weighs a pose's score by exp(-w·I·Δθ²), I the heading prior's information");
+  d->add_option("--search-after-step-m", slam2d.slam.search_after_large_step_m,
+                "half-width (m) of the translation search after a large odometry step");
   d->add_option("--search-after-step-translation-weight", slam2d.slam.search_after_large_step_translation_weight,
                 "the search after a large odometry step weighs a pose's score by exp(-w·|Δt|²) (1/m²)");
   d->add_option("--search-translation-weight", slam2d.slam.search_without_odometry_translation_weight,
