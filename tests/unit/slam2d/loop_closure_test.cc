@@ -199,10 +199,6 @@ TEST_F(SimulatedLoop, ScansWithTooFewPointsAndWeakAmbiguousMatchesCloseNothing) 
   EXPECT_EQ(few_points.accepted, 0u);
 }
 
-// A closure against a sparse submap (here every submap counts as sparse) is
-// tied to the submap's keyframes nearest the matched pose and reported against
-// the nearest; with sparse_loop_edge_keyframes 0, against the anchor (the
-// middle keyframe). Either way the reported relative pose is the true one.
 // With a wide ambiguity margin the tour's matches find rivals: each closure
 // from such a match reports a unit direction (towards its rival), the others
 // none; without the ambiguity check no closure has one.
@@ -231,6 +227,10 @@ TEST_F(SimulatedLoop, AnAmbiguousClosureReportsTheDirectionItLeavesOpen) {
   for (const LoopClosure2d& c : unchecked) EXPECT_FALSE(c.ambiguous_direction.has_value());
 }
 
+// A closure against a sparse submap (here every submap counts as sparse) is
+// tied to the submap's keyframes nearest the matched pose and reported against
+// the nearest; with sparse_loop_edge_keyframes 0, against the anchor (the
+// middle keyframe). Either way the reported relative pose is the true one.
 TEST_F(SimulatedLoop, SparseSubmapClosuresAreTiedWhereTheScanMatched) {
   const std::vector<Pose2> truth = outAndAgain();
   const auto closures = [&](int tied_keyframes) {
