@@ -2,10 +2,16 @@
 // and rmapd finds loop closures between their places; the viewer lists them (with each one's
 // measured relative pose as distance and turn) and draws each as a line between its two poses
 // in its source's colour (web/app/colors.js LOOP_COLORS), and the lines show in a screenshot.
+// rmapd runs with a wide ambiguity margin and keeps ambiguous matches, so that some geometry
+// closures carry an `ambiguous_direction` (the simulated buildings have no long corridor), which
+// the list marks with "↔".
 //
 //   node --test tests/browser/loop_closures.test.mjs      (env: RMAPD, RMAP_SIM, RMAP_TEST_ARTIFACTS)
 
 import assert from 'node:assert/strict';
+import fs from 'node:fs';
+import os from 'node:os';
+import path from 'node:path';
 import { after, before, describe, test } from 'node:test';
 
 import {
@@ -36,7 +42,10 @@ function pixelsOf(png, rect, css, tolerance = 40) {
 
 describe('loop closures in the viewer', { timeout: 200000 }, () => {
   before(async () => {
-    server = await startRmapd();
+    const dir = fs.mkdtempSync(path.join(os.tmpdir(), 'rmap-loops-'));
+    const config = path.join(dir, 'rmapd.yaml');
+    fs.writeFileSync(config, 'slam2d:\n  loop_closure:\n    ambiguity_margin: 0.15\n    ambiguous_min_score: 0\n');
+    server = await startRmapd({ config });
     log(`rmapd ${server.apiUrl} (viewer at ${server.url})`);
     sim = startSim(server, { robots: 0, duration: 150, rate: 0, extra: ['--laser2d-robots', '2'] });
     await waitFor('loop closures of map sim', async () => {
@@ -75,13 +84,16 @@ describe('loop closures in the viewer', { timeout: 200000 }, () => {
       assert.equal(await page.locator('#loops-empty').isHidden(), true);
       // Each listed closure shows its measured relative pose as distance and turn (none: empty).
       const listed = await page.$$eval('#loops li', (lis) => lis.map((li) => ({
-        name: li.querySelector('.name').textContent, offset: li.querySelector('.loop-offset').textContent,
+        name: li.querySelector('.name').textContent,
+        offset: li.querySelector('.loop-offset').textContent,
+        title: li.querySelector('.loop-offset').title,
       })));
       // Read again: the list shows the newest closures, pushed (once stored) since the first read.
       const latest = (await getJson(server, '/v1/loop-closures?map=sim&limit=100000')).loop_closures;
       const byId = new Map(latest.map((c) => [c.id, c]));
       let measured = 0;
-      for (const { name, offset } of listed) {
+      let ambiguous = 0;
+      for (const { name, offset, title } of listed) {
         const c = byId.get(Number(/^#(\d+)/.exec(name)[1]));
         assert.ok(c, `listed ${name} is not stored`);
         let expected = '';
@@ -90,11 +102,19 @@ describe('loop closures in the viewer', { timeout: 200000 }, () => {
           const turn = (2 * Math.acos(Math.min(1, Math.abs(c.relative_pose.orientation[0]))) * 180) / Math.PI;
           expected = `${Math.hypot(x, y, z).toFixed(2)} m ${turn.toFixed(1)}°`;
           measured += 1;
+          // An ambiguous closure is marked, and its tooltip names the direction it leaves open.
+          const along = c.ambiguous_direction;
+          if (along) {
+            expected += ' ↔';
+            ambiguous += 1;
+            assert.ok(title.includes(`(${along[0].toFixed(2)}, ${along[1].toFixed(2)})`), `closure ${c.id}: ${title}`);
+          }
         }
         assert.equal(offset, expected, `closure ${c.id}`);
       }
-      log(`listed ${listed.length} closures, ${measured} with a measured relative pose`);
+      log(`listed ${listed.length} closures, ${measured} with a measured relative pose, ${ambiguous} ambiguous`);
       assert.ok(measured > 0, 'no listed closure shows a measured relative pose');
+      assert.ok(ambiguous > 0, 'no listed closure is marked ambiguous');
       // The lines are on the map's canvas (not only in the list), in the colours of their sources.
       await waitFor('the map drawn', async () => hook((v) => v.cuboidCount() > 0 && v.tileStats().pending === 0),
         { timeout: 60000 });
