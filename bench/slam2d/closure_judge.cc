@@ -170,6 +170,20 @@ std::vector<Eigen::Vector2d> judgeLocalMap(size_t match, const Pose2& judge_matc
 
 }  // namespace
 
+std::optional<double> judgeJump_m(const ClosureJudge& judge, const JudgedRun& run, size_t scan) {
+  std::optional<double> largest;
+  const size_t first = scan > kScanFitNeighbours ? scan - kScanFitNeighbours : 0;
+  const size_t scans = std::min(run.laser_odometry.size(), judge.reference.size());
+  for (size_t k = first; k < scan + kScanFitNeighbours && k + 1 < scans; ++k) {
+    const std::optional<Pose2>&a = judge.reference[k], &b = judge.reference[k + 1];
+    const std::optional<Pose2>&oa = run.laser_odometry[k], &ob = run.laser_odometry[k + 1];
+    if (!a || !b || !oa || !ob) continue;
+    const double jump_m = (between(*a, *b).translation() - between(*oa, *ob).translation()).norm();
+    largest = std::max(largest.value_or(0.0), jump_m);
+  }
+  return largest;
+}
+
 json judgeClosures(const std::vector<slam2d::LoopClosure2d>& closures,
                    const std::vector<slam2d::LoopClosure2d>& withdrawn, const JudgedRun& run,
                    std::vector<ClosureJudge> judges, const std::vector<datasets::SlamRelation>& relations) {
@@ -194,7 +208,9 @@ json judgeClosures(const std::vector<slam2d::LoopClosure2d>& closures,
   std::vector<size_t> judged_submap(judges.size(), 0), wrong_submap(judges.size(), 0);
   std::vector<size_t> wrong_across(judges.size(), 0);
   std::vector<size_t> wrong_confirmed(judges.size(), 0), wrong_across_confirmed(judges.size(), 0);
+  std::vector<size_t> wrong_away(judges.size(), 0), wrong_across_away(judges.size(), 0), credible(judges.size(), 0);
   const bool scan_check = !run.scan_points.empty();
+  const bool jump_check = !run.laser_odometry.empty();
   size_t ambiguous = 0;
   std::vector<double> worst_m(judges.size(), 0.0);
   size_t cross = 0, judged_by_all = 0, wrong_by_all = 0;
@@ -243,15 +259,26 @@ json judgeClosures(const std::vector<slam2d::LoopClosure2d>& closures,
         verdict.update({{"error_across_ambiguity_m", across_m}, {"false_across_ambiguity", wrong_across_here}});
       }
       wrong_across[j] += wrong_across_here;
+      bool confirmed = false;
       if (scan_check && is_wrong) {  // wrong across a rival is wrong in full too
         const std::vector<Eigen::Vector2d> local_map = judgeLocalMap(*match, *rm, *query, run, judges[j]);
         const double closure_fit_m = scanFit_m(run.scan_points[*query], measured, local_map);
         const double judge_fit_m = scanFit_m(run.scan_points[*query], between(*rm, *rq), local_map);
-        const bool confirmed = judge_fit_m <= closure_fit_m;
+        confirmed = judge_fit_m <= closure_fit_m;
         wrong_confirmed[j] += is_wrong && confirmed;
         wrong_across_confirmed[j] += wrong_across_here && confirmed;
         verdict.update({{"scan_fit_closure_m", closure_fit_m}, {"scan_fit_judge_m", judge_fit_m},
                         {"confirmed_by_scans", confirmed}});
+      }
+      if (jump_check && is_wrong) {
+        const std::optional<double> at_query = judgeJump_m(judges[j], run, *query);
+        const std::optional<double> at_match = judgeJump_m(judges[j], run, *match);
+        const double jump_m = std::max(at_query.value_or(0.0), at_match.value_or(0.0));
+        const bool away = jump_m <= kMaxJudgeStepJump_m;
+        wrong_away[j] += away;
+        wrong_across_away[j] += wrong_across_here && away;
+        credible[j] += wrong_across_here && away && confirmed;
+        verdict["judge_jump_m"] = at_query || at_match ? json(jump_m) : json(nullptr);
       }
       if (const std::optional<Pose2> anchor = submapAnchor(c, match, inputOf, run, judges[j])) {
         const Pose2 es = between(between(*anchor, *rq), measured);
@@ -303,6 +330,10 @@ json judgeClosures(const std::vector<slam2d::LoopClosure2d>& closures,
                          {"false_confirmed_by_scans", scan_check ? json(wrong_confirmed[j]) : json(nullptr)},
                          {"false_across_ambiguity_confirmed_by_scans",
                           scan_check ? json(wrong_across_confirmed[j]) : json(nullptr)},
+                         {"false_away_from_judge_jumps", jump_check ? json(wrong_away[j]) : json(nullptr)},
+                         {"false_across_ambiguity_away_from_judge_jumps",
+                          jump_check ? json(wrong_across_away[j]) : json(nullptr)},
+                         {"false_credible", scan_check && jump_check ? json(credible[j]) : json(nullptr)},
                          {"worst_closure_error_m", judged[j] > 0 ? json(worst_m[j]) : json(nullptr)},
                          {"judge_poses_contradicted", contradicted[j]}});
   const bool first = !judges.empty() && judged.front() > 0;
@@ -320,6 +351,10 @@ json judgeClosures(const std::vector<slam2d::LoopClosure2d>& closures,
           {"false_confirmed_by_scans", first && scan_check ? json(wrong_confirmed.front()) : json(nullptr)},
           {"false_across_ambiguity_confirmed_by_scans",
            first && scan_check ? json(wrong_across_confirmed.front()) : json(nullptr)},
+          {"false_away_from_judge_jumps", first && jump_check ? json(wrong_away.front()) : json(nullptr)},
+          {"false_across_ambiguity_away_from_judge_jumps",
+           first && jump_check ? json(wrong_across_away.front()) : json(nullptr)},
+          {"false_credible", first && scan_check && jump_check ? json(credible.front()) : json(nullptr)},
           {"judged_by", judges.empty() ? json(nullptr) : json(judges.front().judged_by)},
           {"judge_poses_contradicted", judges.empty() ? json(nullptr) : json(contradicted.front())},
           {"judges", per_judge},

@@ -178,12 +178,16 @@ RunClosures takeClosures(slam2d::Slam2d& slam) {
 }
 
 JudgedRun judgedRun(const std::vector<Slam2dInput>& inputs, const std::vector<Pose2>& laser_poses) {
-  JudgedRun run{{}, {}, laser_poses, {}};
+  JudgedRun run{{}, {}, laser_poses, {}, {}};
+  bool odometry = false;
   for (const Slam2dInput& in : inputs) {
     run.stamps_ns.push_back(in.scan.stamp_ns);
     run.sensor_mounts.push_back(in.scan.sensor_mount);
     run.scan_points.push_back(scanReturns(in.scan));
+    run.laser_odometry.push_back(in.odometry ? std::optional<Pose2>(*in.odometry * in.scan.sensor_mount) : std::nullopt);
+    odometry = odometry || in.odometry.has_value();
   }
+  if (!odometry) run.laser_odometry.clear();  // no jump check
   return run;
 }
 
@@ -281,7 +285,9 @@ json revisitJson(const std::vector<Slam2dInput>& inputs, const std::vector<slam2
 constexpr const char* kRunClosureKeys[] = {"closures", "closures_judged", "false_closures", "false_against_submap",
                                            "false_across_ambiguity", "ambiguous_closures", "false_by_all_judges",
                                            "closures_judged_by_relations", "false_by_relations",
-                                           "false_confirmed_by_scans", "false_across_ambiguity_confirmed_by_scans"};
+                                           "false_confirmed_by_scans", "false_across_ambiguity_confirmed_by_scans",
+                                           "false_away_from_judge_jumps",
+                                           "false_across_ambiguity_away_from_judge_jumps", "false_credible"};
 
 /// Runs 2..n of --repeat: the run from n − 1 other starts (seeded, so reproducible), each
 /// scored as the headline run is. @return JSON: runs [{start, ate_m, rpe_1m_m, rel_trans_err_m,
@@ -330,6 +336,11 @@ json repeatedRuns(const Slam2dBenchOptions& options, const Slam2dDataset& data, 
         std::printf("; the scans confirm %zu false (%zu with the ambiguous judged across their rival)",
                     one["false_confirmed_by_scans"].get<size_t>(),
                     one["false_across_ambiguity_confirmed_by_scans"].get<size_t>());
+      if (!one["false_away_from_judge_jumps"].is_null())
+        std::printf("; %zu false away from the judge's jumps (%zu across)", one["false_away_from_judge_jumps"].get<size_t>(),
+                    one["false_across_ambiguity_away_from_judge_jumps"].get<size_t>());
+      if (!one["false_credible"].is_null())
+        std::printf("; %zu false by every check", one["false_credible"].get<size_t>());
     }
     std::printf(", %.1f s CPU\n", run.cpu_s);
     runs.push_back(std::move(one));
@@ -489,6 +500,15 @@ int runSlam2dBench(const Slam2dBenchOptions& options) {
                     "with the ambiguous judged across their rival)\n",
                     j["false_confirmed_by_scans"].get<size_t>(),
                     j["false_across_ambiguity_confirmed_by_scans"].get<size_t>());
+      if (!j["false_away_from_judge_jumps"].is_null())
+        std::printf("    of the false, %zu (%zu with the ambiguous judged across their rival) lie away from the judge's "
+                    "jumps (a step more than %.1f m off the odometry's within %zu scans)\n",
+                    j["false_away_from_judge_jumps"].get<size_t>(),
+                    j["false_across_ambiguity_away_from_judge_jumps"].get<size_t>(), kMaxJudgeStepJump_m,
+                    kScanFitNeighbours);
+      if (!j["false_credible"].is_null())
+        std::printf("    false by every check (across the rival, confirmed by the scans, away from the jumps): %zu\n",
+                    j["false_credible"].get<size_t>());
     }
     if (!lc_json["false_by_relations"].is_null())
       std::printf("  %zu judged by the relations chained from match to query: %zu false, worst %.3f m\n",

@@ -122,6 +122,7 @@ TEST(ClosureJudge, TheScansShowWhetherAFalseVerdictIsTheJudgesError) {
     run.stamps_ns.push_back(1000 + i);
     run.sensor_mounts.push_back({});
     run.laser_poses.push_back(laser);
+    run.laser_odometry.push_back(laser);
     std::vector<Eigen::Vector2d> seen;
     for (const Eigen::Vector2d& l : landmarks) seen.push_back(laser.inverse() * l);
     run.scan_points.push_back(std::move(seen));
@@ -141,6 +142,9 @@ TEST(ClosureJudge, TheScansShowWhetherAFalseVerdictIsTheJudgesError) {
   EXPECT_EQ(r["false_closures"], 2);
   EXPECT_EQ(r["false_confirmed_by_scans"], 1);
   EXPECT_EQ(r["false_across_ambiguity_confirmed_by_scans"], 1);
+  // The judge's 0.4 m at scan 39 is below a jump: both lie away from one, and the confirmed one is credible.
+  EXPECT_EQ(r["false_away_from_judge_jumps"], 2);
+  EXPECT_EQ(r["false_credible"], 1);
   const nlohmann::json& list = r["list"];
   ASSERT_EQ(list.size(), 2u);
   EXPECT_TRUE(list[0]["false"].get<bool>()) << "the judge's pose of scan 39 is 0.4 m off";
@@ -156,7 +160,57 @@ TEST(ClosureJudge, TheScansShowWhetherAFalseVerdictIsTheJudgesError) {
   const nlohmann::json unchecked = judgeClosures(closures, {}, run, {judge});
   EXPECT_EQ(unchecked["false_closures"], 2);
   EXPECT_TRUE(unchecked["false_confirmed_by_scans"].is_null());
+  EXPECT_TRUE(unchecked["false_credible"].is_null());
   EXPECT_FALSE(unchecked["list"][0].contains("confirmed_by_scans"));
+}
+
+TEST(ClosureJudge, FalseVerdictsNextToAJumpOfTheJudgeAreCountedApart) {
+  // 60 scans 0.25 m apart, out along x and back; the odometry is exact. The
+  // judge jumps 1 m sideways between scans 45 and 46 (a particle filter's
+  // correction): its poses from 46 on are 1 m off the run's.
+  JudgedRun run;
+  for (int i = 0; i < 60; ++i) {
+    const Pose2 laser = i < 30 ? Pose2{0.25 * i, 0.0, 0.0} : Pose2{0.25 * (59 - i), 0.1, std::numbers::pi};
+    run.stamps_ns.push_back(1000 + i);
+    run.sensor_mounts.push_back({});
+    run.laser_poses.push_back(laser);
+    run.laser_odometry.push_back(laser);
+  }
+  ClosureJudge judge{"jumps at 46", std::vector<std::optional<Pose2>>(run.laser_poses.begin(), run.laser_poses.end()), {}};
+  for (size_t k = 46; k < 60; ++k) judge.reference[k] = Pose2{0.0, 1.0, 0.0} * *judge.reference[k];
+  EXPECT_NEAR(*judgeJump_m(judge, run, 46), 1.0, 1e-9);
+  EXPECT_NEAR(*judgeJump_m(judge, run, 31), 1.0, 1e-9) << "step 45 → 46 lies within 15 scans";
+  EXPECT_NEAR(*judgeJump_m(judge, run, 30), 0.0, 1e-9) << "step 45 → 46 lies beyond 15 scans";
+  EXPECT_NEAR(*judgeJump_m(judge, run, 59), 1.0, 1e-9) << "the last scan's steps end with the run";
+
+  const auto closure = [&](size_t query, size_t match, const Pose2& error) {
+    slam2d::LoopClosure2d c;
+    c.query_stamp_ns = run.stamps_ns[query];
+    c.match_stamp_ns = run.stamps_ns[match];
+    c.relative = between(run.laser_poses[match], run.laser_poses[query]) * error;
+    return c;
+  };
+  // Right, but false by the judge's jump; and 0.4 m off, far from it.
+  const std::vector<slam2d::LoopClosure2d> closures = {closure(50, 10, {}), closure(25, 5, {0.4, 0.0, 0.0})};
+  const nlohmann::json r = judgeClosures(closures, {}, run, {judge});
+  EXPECT_EQ(r["false_closures"], 2);
+  EXPECT_EQ(r["false_away_from_judge_jumps"], 1);
+  EXPECT_EQ(r["false_across_ambiguity_away_from_judge_jumps"], 1);
+  EXPECT_EQ(r["judges"][0]["false_away_from_judge_jumps"], 1);
+  EXPECT_TRUE(r["false_credible"].is_null()) << "no scans: not every check can be made";
+  ASSERT_EQ(r["list"].size(), 2u);
+  EXPECT_NEAR(r["list"][0]["judge_jump_m"].get<double>(), 1.0, 1e-9);
+  EXPECT_NEAR(r["list"][1]["judge_jump_m"].get<double>(), 0.0, 1e-9);
+
+  // Without odometry at a scan its steps are not compared; without any, no check.
+  run.laser_odometry.assign(run.laser_odometry.size(), std::nullopt);
+  EXPECT_FALSE(judgeJump_m(judge, run, 46).has_value());
+  run.laser_odometry.clear();
+  const nlohmann::json unchecked = judgeClosures(closures, {}, run, {judge});
+  EXPECT_EQ(unchecked["false_closures"], 2);
+  EXPECT_TRUE(unchecked["false_away_from_judge_jumps"].is_null());
+  EXPECT_FALSE(unchecked["list"][0].contains("judge_jump_m"));
+  EXPECT_TRUE(unchecked["false_credible"].is_null());
 }
 
 TEST(ClosureJudge, ScanFitIsTheMeanTruncatedDistanceToTheNearestMapPoint) {
