@@ -103,40 +103,49 @@ TEST(ClosureJudge, AnAmbiguousClosureIsAlsoJudgedAcrossItsRival) {
   EXPECT_FALSE(list[2].contains("error_across_ambiguity_m"));
 }
 
-// Two corrections of one run can disagree on a single scan: each judge's
-// verdict is kept, and a closure counts as false by all only when every
-// judge says so.
+/// `scans` scans 0.25 m apart, out along x and back 0.1 m aside (turned); the
+/// estimate and the odometry are the truth; no scan points.
+JudgedRun outAndBack(int scans) {
+  JudgedRun run;
+  for (int i = 0; i < scans; ++i) {
+    const int back = scans - 1 - i;
+    const Pose2 laser = 2 * i < scans ? Pose2{0.25 * i, 0.0, 0.0} : Pose2{0.25 * back, 0.1, std::numbers::pi};
+    run.stamps_ns.push_back(1000 + i);
+    run.sensor_mounts.push_back({});
+    run.laser_poses.push_back(laser);
+    run.laser_odometry.push_back(laser);
+  }
+  return run;
+}
+
+/// A closure of `run` from `match` to `query` at the estimate's relative pose, then `error` on top.
+slam2d::LoopClosure2d closureOf(const JudgedRun& run, size_t query, size_t match, const Pose2& error) {
+  slam2d::LoopClosure2d c;
+  c.query_stamp_ns = run.stamps_ns[query];
+  c.match_stamp_ns = run.stamps_ns[match];
+  c.relative = between(run.laser_poses[match], run.laser_poses[query]) * error;
+  return c;
+}
+
 // A false verdict is checked against the scans: the query's scan fitted to
 // the judge's local map of the match. Where the judge's own pose is off (a
 // corrected log off along a corridor), the closure's pose fits better and the
 // verdict is not confirmed; a closure truly off is.
 TEST(ClosureJudge, TheScansShowWhetherAFalseVerdictIsTheJudgesError) {
-  // 40 scans 0.25 m apart, out along x and back; each sees the same scattered landmarks.
+  // 40 scans out and back; each sees the same scattered landmarks.
   std::mt19937 random(7);
   std::uniform_real_distribution<double> along(-3.0, 8.0), across(-4.0, 4.0);
   std::vector<Eigen::Vector2d> landmarks;
   for (int i = 0; i < 300; ++i) landmarks.emplace_back(along(random), across(random));
-  JudgedRun run;
-  for (int i = 0; i < 40; ++i) {
-    const Pose2 laser = i < 20 ? Pose2{0.25 * i, 0.0, 0.0} : Pose2{0.25 * (39 - i), 0.1, std::numbers::pi};
-    run.stamps_ns.push_back(1000 + i);
-    run.sensor_mounts.push_back({});
-    run.laser_poses.push_back(laser);
-    run.laser_odometry.push_back(laser);
+  JudgedRun run = outAndBack(40);
+  for (const Pose2& laser : run.laser_poses) {
     std::vector<Eigen::Vector2d> seen;
     for (const Eigen::Vector2d& l : landmarks) seen.push_back(laser.inverse() * l);
     run.scan_points.push_back(std::move(seen));
   }
-  const auto closure = [&](size_t query, size_t match, const Pose2& error) {
-    slam2d::LoopClosure2d c;
-    c.query_stamp_ns = run.stamps_ns[query];
-    c.match_stamp_ns = run.stamps_ns[match];
-    c.relative = between(run.laser_poses[match], run.laser_poses[query]) * error;
-    return c;
-  };
   ClosureJudge judge{"off at scan 39", std::vector<std::optional<Pose2>>(run.laser_poses.begin(), run.laser_poses.end()), {}};
   judge.reference[39] = *judge.reference[39] * Pose2{0.4, 0.0, 0.0};
-  const std::vector<slam2d::LoopClosure2d> closures = {closure(39, 0, {}), closure(38, 1, {0.4, 0.0, 0.0})};
+  const std::vector<slam2d::LoopClosure2d> closures = {closureOf(run, 39, 0, {}), closureOf(run, 38, 1, {0.4, 0.0, 0.0})};
 
   const nlohmann::json r = judgeClosures(closures, {}, run, {judge});
   EXPECT_EQ(r["false_closures"], 2);
@@ -165,17 +174,9 @@ TEST(ClosureJudge, TheScansShowWhetherAFalseVerdictIsTheJudgesError) {
 }
 
 TEST(ClosureJudge, FalseVerdictsNextToAJumpOfTheJudgeAreCountedApart) {
-  // 60 scans 0.25 m apart, out along x and back; the odometry is exact. The
-  // judge jumps 1 m sideways between scans 45 and 46 (a particle filter's
+  // 60 scans out and back; the odometry is exact. The judge jumps 1 m sideways between scans 45 and 46 (a particle filter's
   // correction): its poses from 46 on are 1 m off the run's.
-  JudgedRun run;
-  for (int i = 0; i < 60; ++i) {
-    const Pose2 laser = i < 30 ? Pose2{0.25 * i, 0.0, 0.0} : Pose2{0.25 * (59 - i), 0.1, std::numbers::pi};
-    run.stamps_ns.push_back(1000 + i);
-    run.sensor_mounts.push_back({});
-    run.laser_poses.push_back(laser);
-    run.laser_odometry.push_back(laser);
-  }
+  JudgedRun run = outAndBack(60);
   ClosureJudge judge{"jumps at 46", std::vector<std::optional<Pose2>>(run.laser_poses.begin(), run.laser_poses.end()), {}};
   for (size_t k = 46; k < 60; ++k) judge.reference[k] = Pose2{0.0, 1.0, 0.0} * *judge.reference[k];
   EXPECT_NEAR(*judgeJump_m(judge, run, 46), 1.0, 1e-9);
@@ -183,15 +184,8 @@ TEST(ClosureJudge, FalseVerdictsNextToAJumpOfTheJudgeAreCountedApart) {
   EXPECT_NEAR(*judgeJump_m(judge, run, 30), 0.0, 1e-9) << "step 45 → 46 lies beyond 15 scans";
   EXPECT_NEAR(*judgeJump_m(judge, run, 59), 1.0, 1e-9) << "the last scan's steps end with the run";
 
-  const auto closure = [&](size_t query, size_t match, const Pose2& error) {
-    slam2d::LoopClosure2d c;
-    c.query_stamp_ns = run.stamps_ns[query];
-    c.match_stamp_ns = run.stamps_ns[match];
-    c.relative = between(run.laser_poses[match], run.laser_poses[query]) * error;
-    return c;
-  };
   // Right, but false by the judge's jump; and 0.4 m off, far from it.
-  const std::vector<slam2d::LoopClosure2d> closures = {closure(50, 10, {}), closure(25, 5, {0.4, 0.0, 0.0})};
+  const std::vector<slam2d::LoopClosure2d> closures = {closureOf(run, 50, 10, {}), closureOf(run, 25, 5, {0.4, 0.0, 0.0})};
   const nlohmann::json r = judgeClosures(closures, {}, run, {judge});
   EXPECT_EQ(r["false_closures"], 2);
   EXPECT_EQ(r["false_away_from_judge_jumps"], 1);
@@ -230,6 +224,9 @@ TEST(ClosureJudge, ScanFitIsTheMeanTruncatedDistanceToTheNearestMapPoint) {
   EXPECT_NEAR((returns[1] - Eigen::Vector2d(0.0, 1.0)).norm(), 0.0, 1e-6);
 }
 
+// Two corrections of one run can disagree on a single scan: each judge's
+// verdict is kept, and a closure counts as false by all only when every
+// judge says so.
 TEST(ClosureJudge, EachJudgeGivesItsVerdict) {
   const TenScanRun run;
   ClosureJudge skewed = run.truthJudge("skewed");
