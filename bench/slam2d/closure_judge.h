@@ -72,11 +72,11 @@ constexpr double kScanFitTruncation_m = 0.3;
 constexpr size_t kScanFitNeighbours = 15;
 
 /// A judge's step between two scans that differs from the odometry's by more
-/// than this (m) is a jump of the judge: a particle filter's correction
-/// (freiburg-campus's corrected log has 16 steps 0.5–1.2 m off the
-/// odometry's, mostly sideways: at scan 238 1.00 m where the wheels moved
-/// 0.01 m; BENCHMARKS.md §4), not a motion. On the other corrected logs the two never differ by more than
-/// 0.49 m in a step.
+/// than this (m) is a jump of the judge: a particle filter's correction, not
+/// a motion. freiburg-campus's corrected log has 16 steps 0.5–1.2 m off the
+/// odometry's, mostly sideways (at scan 238 1.00 m where the wheels moved
+/// 0.01 m; BENCHMARKS.md §4); on the other corrected logs no step is more
+/// than 0.49 m off.
 constexpr double kMaxJudgeStepJump_m = 0.5;
 
 /// The largest difference (m) between the judge's and the odometry's
