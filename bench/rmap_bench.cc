@@ -139,6 +139,8 @@ int main(int argc, char** argv) {
   d->add_option("--search-translation-weight", slam2d.slam.search_without_odometry_translation_weight,
                 "without odometry, a searched pose's score is weighed by exp(-w·|Δt|²) (1/m²)");
   d->add_option("--relock-margin", slam2d.slam.relock_residual_margin, "match residual above the recent mean that triggers a search (<= 0: off)");
+  d->add_option("--relock-after-step-m", slam2d.slam.relock_after_large_step_m,
+                "half-width (m) of the unweighted search that re-locks a poor fit after a large odometry step (0: off)");
   std::string loop_closure = "off";  // off by default: the front-end figures stay comparable
   d->add_option("--loop-closure", loop_closure, "loop closure with a pose graph (scored: the corrected trajectory)")
       ->check(CLI::IsMember({"on", "off"}));

@@ -183,6 +183,7 @@ void readSlam2d(Section& s, Slam2dConfig& slam2d) {
   s.read("map_update_angle_rad", o.map_update_angle_rad);
   s.read("reflectivity_weight", o.reflectivity_weight);
   s.read("self_calibration", o.self_calibration);
+  s.read("relock_after_large_step_m", o.relock_after_large_step_m);
   s.section("loop_closure", [&](Section& loop) { readSlam2dLoopClosure(loop, o.loop_closure); });
 }
 

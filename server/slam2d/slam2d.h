@@ -149,6 +149,19 @@ struct Slam2dOptions {
   double relock_residual_margin = 0.02;
   double relock_search_rad = 0.2;
   double relock_search_m = 0.2;
+  /// Wheel slips: after a large odometry step's search, the same test; then a
+  /// search over ±relock_after_large_step_m (0: off) and
+  /// ±search_after_large_step_rad without weights. Only a pick beyond the
+  /// first search's reach (search_after_large_step_m) counts: the odometry
+  /// slipped there, so the pick is refined without the odometry's prior,
+  /// which would haul it back to the prediction, and kept if it fits as
+  /// above. A sparse run pushed 0.4 m sideways unseen by the wheels follows
+  /// the push without it and is back within 0.06 m with it (0.6 m). Off by
+  /// default: on the corrected logs from 10 starts (docs/BENCHMARKS.md §4)
+  /// campus's worst start went 1.08 → 0.36 m and infinite-corridor's median
+  /// 0.747 → 0.708 m, but intel locked onto a look-alike 0.48 m away that fit
+  /// better than its recent scans (median 0.069 → 0.077 m, 2 false closures).
+  double relock_after_large_step_m = 0.0;
   /// Sparse trajectories: a trajectory whose scans are on average (running
   /// mean over ≈ 10 scans) sparse_scan_motion_m or more apart — logs that
   /// keep one scan per ≈ 1 m or 0.5 rad, as the corrected logs do; raw logs

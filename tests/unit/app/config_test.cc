@@ -372,6 +372,7 @@ slam2d:
   map_update_angle_rad: 0.2
   reflectivity_weight: 0.5
   self_calibration: false
+  relock_after_large_step_m: 0.6
   loop_closure:
     enabled: false
     min_score: 0.62
@@ -399,6 +400,7 @@ slam2d:
   EXPECT_EQ(o.map_update_angle_rad, 0.2);
   EXPECT_EQ(o.reflectivity_weight, 0.5);
   EXPECT_FALSE(o.self_calibration);
+  EXPECT_EQ(o.relock_after_large_step_m, 0.6);
   EXPECT_FALSE(o.loop_closure.enabled);
   EXPECT_EQ(o.loop_closure.min_score, 0.62);
   EXPECT_EQ(o.loop_closure.sparse_min_score, 0.75);
@@ -423,7 +425,8 @@ TEST(Slam2dOptions, BadValuesAreRefusedNamingTheSection) {
                            "slam2d:\n  loop_closure:\n    confirm_after_s: -1\n",
                            "slam2d:\n  loop_closure:\n    min_match_points: -1\n",
                            "slam2d:\n  loop_closure:\n    rerender_checkpoints: -2\n",
-                           "slam2d:\n  loop_closure:\n    ambiguity_margin: .nan\n"}) {
+                           "slam2d:\n  loop_closure:\n    ambiguity_margin: .nan\n",
+                           "slam2d:\n  relock_after_large_step_m: -0.5\n"}) {
     const YamlFile file(text);
     Config config;
     loadConfigFile(file.path(), config);

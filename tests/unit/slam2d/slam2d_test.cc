@@ -194,6 +194,43 @@ TEST_F(SimulatedTour, TracksThroughAnOdometrySlip) {
   EXPECT_LT(run(0.0), 0.05);
 }
 
+TEST_F(SimulatedTour, ReLocksAfterALargeStepTheOdometryGotWrongSideways) {
+  // A sparse log (scans ≈ 1 m apart, so every step is searched) with perfect
+  // odometry but for one step the wheels did not see: the robot pushed
+  // 0.4 m sideways, beyond the ±search_after_large_step_m search. From then
+  // on the truth is the odometry's path shifted by the push.
+  const sim::Laser2dModel model = sim::Laser2dModel::sickLike();
+  const auto worst_after_push_m = [&](double relock_after_large_step_m, double push_m, size_t push_at) {
+    Slam2dOptions options;
+    options.loop_closure.enabled = false;
+    options.relock_after_large_step_m = relock_after_large_step_m;
+    Slam2d slam(options);
+    std::mt19937_64 rng(26);
+    const double heading_rad = (*tour_)[push_at].theta_rad;
+    const Pose2 push{-std::sin(heading_rad) * push_m, std::cos(heading_rad) * push_m, 0.0};
+    double worst_m = 0.0;
+    for (size_t k = 0; k < push_at + 40; k += 4) {
+      const Pose2 truth = k < push_at ? (*tour_)[k] : push * (*tour_)[k];
+      const Pose2 est =
+          slam.addScan("robot", testing::simScan(*world_, truth, model, rng, int64_t(k) * 100'000'000), (*tour_)[k]);
+      if (k >= push_at) worst_m = std::max(worst_m, (est.translation() - truth.translation()).norm());
+    }
+    return worst_m;
+  };
+  const double relock_m = 0.6;
+  for (const size_t push_at : {80, 100}) {
+    for (const double push_m : {-0.4, 0.4}) {
+      EXPECT_LT(worst_after_push_m(relock_m, push_m, push_at), 0.07) << push_m << " m at " << push_at;
+      EXPECT_GT(worst_after_push_m(Slam2dOptions{}.relock_after_large_step_m, push_m, push_at), 0.3)
+          << "by default the run follows the wheels";
+    }
+    // Without a push the re-lock changes nothing.
+    const double unpushed_m = worst_after_push_m(relock_m, 0.0, push_at);
+    EXPECT_LT(unpushed_m, 0.06);
+    EXPECT_EQ(unpushed_m, worst_after_push_m(Slam2dOptions{}.relock_after_large_step_m, 0.0, push_at));
+  }
+}
+
 TEST_F(SimulatedTour, TwoRobotsShareOneMap) {
   std::mt19937_64 rng(23);
   const sim::Laser2dModel model = sim::Laser2dModel::sickLike();
@@ -301,6 +338,7 @@ TEST(Slam2d, RejectsBadOptions) {
       [](Slam2dOptions& o) { o.occupancy.hit_log_odds = -1.0f; },
       [](Slam2dOptions& o) { o.incidence.window_m = 0.0; },
       [](Slam2dOptions& o) { o.relock_search_m = -1.0; },
+      [](Slam2dOptions& o) { o.relock_after_large_step_m = NAN; },
       [](Slam2dOptions& o) { o.local_map_keyframes = -1; },
       [](Slam2dOptions& o) { o.sparse_scan_motion_m = NAN; },
       [](Slam2dOptions& o) { o.odometry_heading_kappa = -1e-3; },
