@@ -25,6 +25,7 @@ const LOOP_COLORS = { camera: '#ffd54a', laser_intensity: '#ff4df0', geometry: '
 let server;
 let sim;
 let browser;
+let configDir;
 
 /** Pixels of a screenshot inside `rect` within `tolerance` of a CSS colour. */
 function pixelsOf(png, rect, css, tolerance = 40) {
@@ -42,8 +43,8 @@ function pixelsOf(png, rect, css, tolerance = 40) {
 
 describe('loop closures in the viewer', { timeout: 200000 }, () => {
   before(async () => {
-    const dir = fs.mkdtempSync(path.join(os.tmpdir(), 'rmap-loops-'));
-    const config = path.join(dir, 'rmapd.yaml');
+    configDir = fs.mkdtempSync(path.join(os.tmpdir(), 'rmap-loops-'));
+    const config = path.join(configDir, 'rmapd.yaml');
     fs.writeFileSync(config, 'slam2d:\n  loop_closure:\n    ambiguity_margin: 0.15\n    ambiguous_min_score: 0\n');
     server = await startRmapd({ config });
     log(`rmapd ${server.apiUrl} (viewer at ${server.url})`);
@@ -59,6 +60,7 @@ describe('loop closures in the viewer', { timeout: 200000 }, () => {
     if (browser) await browser.close().catch(() => {});
     if (sim) await sim.stop();
     if (server) await server.stop();
+    if (configDir) fs.rmSync(configDir, { recursive: true, force: true });
   });
 
   test('each stored loop closure is listed and drawn as a line in its source colour', async () => {
