@@ -153,14 +153,19 @@ struct Slam2dOptions {
   /// search over ±relock_after_large_step_m (0: off) and
   /// ±search_after_large_step_rad without weights. Only a pick beyond the
   /// first search's reach (search_after_large_step_m) counts: the odometry
-  /// slipped there, so the pick is refined without the odometry's prior,
-  /// which would haul it back to the prediction, and kept if it fits as
-  /// above. A sparse run pushed 0.4 m sideways unseen by the wheels follows
-  /// the push without it and is back within 0.06 m with it (0.6 m). Off by
-  /// default: on the corrected logs from 10 starts (docs/BENCHMARKS.md §4)
-  /// campus's worst start went 1.08 → 0.36 m and infinite-corridor's median
-  /// 0.747 → 0.708 m, but intel locked onto a look-alike 0.48 m away that fit
-  /// better than its recent scans (median 0.069 → 0.077 m, 2 false closures).
+  /// slipped there, or the scan fits a look-alike. The pick is refined
+  /// without the odometry's prior (which would haul it back to the
+  /// prediction) and, if it fits as above, the next scan decides: it is
+  /// matched from the slipped pose too, and the slip is taken if that fits
+  /// better by relock_residual_margin and within it of the recent scans. A
+  /// sparse run pushed 0.4 m sideways unseen by the wheels follows the push
+  /// without it and is back from the next scan on with it (0.6 m). Taking the
+  /// pick at once also brought campus's worst start back (1.08 → 0.36 m) but
+  /// locked intel onto a look-alike (2 false closures). With the next scan
+  /// deciding, from 10 starts (docs/BENCHMARKS.md §4): intel 0.069 → 0.071 m
+  /// (worst 0.081 → 0.093), no false closure; infinite-corridor 0.747 →
+  /// 0.677 (worst 0.906 → 1.100); campus, edmonton, csail, belgioioso,
+  /// freiburg-101 the same. Off by default until more starts decide.
   double relock_after_large_step_m = 0.0;
   /// Sparse trajectories: a trajectory whose scans are on average (running
   /// mean over ≈ 10 scans) sparse_scan_motion_m or more apart — logs that
@@ -309,6 +314,7 @@ class Slam2d {
     std::deque<double> translation_disagreement_m, heading_disagreement_rad;
     size_t index = 0;                      ///< into names_ and scans_
     std::optional<size_t> keyframe;        ///< its newest keyframe
+    std::optional<Pose2> slip_pose;        ///< the last scan's pose if the wheels slipped (relock_after_large_step_m)
   };
 
   /// A scan's pose relative to the keyframe before it (absolute when none).
