@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <utility>
 
 namespace rmap::slam2d {
 
@@ -239,6 +240,8 @@ Pose2 Slam2d::addScan(const std::string& trajectory, const LaserScan& scan, cons
 
   Pose2 estimate = predicted;
   const GridMap2d& match_map = is_new ? map_ : matchingMap(track.index);  // a joining robot locks onto the whole map
+  // A slip hypothesis is decided by the scan right after it, or dropped.
+  const std::optional<Pose2> last_slip_pose = std::exchange(track.slip_pose, std::nullopt);
   if (!is_new && !points.empty() && !map_.empty()) {
     const bool sparse_before = sparse(track);  // as of the scans before this one
     std::optional<PosePrior> prior;
@@ -294,10 +297,10 @@ Pose2 Slam2d::addScan(const std::string& trajectory, const LaserScan& scan, cons
           match = *searched;
       }
     }
-    if (track.slip_pose && odometry_step) {
+    if (last_slip_pose && odometry_step) {
       // The previous scan's slip, taken if this scan, predicted from it,
       // fits clearly better and as well as the recent scans.
-      const Pose2 slipped = *track.slip_pose * step;
+      const Pose2 slipped = *last_slip_pose * step;
       const MatchResult after_slip =
           matchScan(match_map, points, slipped, PosePrior{slipped, prior->information}, options_.matcher);
       if (after_slip.mean_residual + options_.relock_residual_margin < match.mean_residual &&
