@@ -41,9 +41,9 @@ void checkPose(const Pose2& p, const char* what) {
 
 /// The slipped pose of Slam2dOptions::relock_after_large_step_m. The pick is
 /// the search's alone (no Gauss–Newton iterations). Picks within the first
-/// search's reach are left alone: refined without the prior, one in the unit
-/// test's unpushed run slid 0.09 m along a weakly held direction onto a lower
-/// but wrong residual.
+/// search's reach are left alone: refined without the prior, one in an
+/// unpushed simulated run slid 0.09 m along a weakly held direction onto a
+/// lower but wrong residual.
 std::optional<MatchResult> relockAfterLargeStep(const GridMap2d& map, std::span<const MatchPoint> points,
                                                 const Pose2& predicted, ScanMatcherOptions matcher,
                                                 const Slam2dOptions& options) {
