@@ -48,8 +48,10 @@ void LoopClosureOptions::validate() const {
   requireLoopOption(min_match_points >= 0, "min_match_points must be ≥ 0");
   requireLoopOption(sparse_loop_edge_keyframes >= 0, "sparse_loop_edge_keyframes must be ≥ 0");
   requireLoopOption(std::isfinite(member_check_exclusion_m) && positive(member_check_window_m) && member_check_window_m <= 5.0 &&
-                        nonNegative(member_check_window_rad) && member_check_window_rad <= 3.14159,
-                    "need a finite member_check_exclusion_m, 0 < member_check_window_m ≤ 5, 0 ≤ member_check_window_rad ≤ π");
+                        nonNegative(member_check_window_rad) && member_check_window_rad <= 3.14159 &&
+                        nonNegative(member_check_max_shift_m) && member_check_max_shift_m <= 5.0,
+                    "need a finite member_check_exclusion_m, 0 < member_check_window_m ≤ 5, 0 ≤ member_check_window_rad ≤ π, "
+                    "0 ≤ member_check_max_shift_m ≤ 5");
   requireLoopOption(sparse_raster_dilation_cells >= 0 && sparse_raster_dilation_cells <= 10 && submap.raster_dilation_cells >= 0 &&
                         submap.raster_dilation_cells <= 10,
                     "raster dilation must be in [0, 10] cells");
@@ -305,8 +307,10 @@ bool LoopCloser::drawnRight(const std::vector<Keyframe>& keyframes, size_t subma
         views ? views->match(member.match_points, Pose2{}, options_.member_check_window_m, options_.member_check_window_rad,
                              options_.min_score)
               : std::nullopt;
-    // The heading only: a shift along a corridor is where this match is weakest.
-    right = !m || std::abs(m->pose.theta_rad) <= options_.small_correction_rad;
+    // A shift only beyond member_check_max_shift_m: along a corridor this match is weakest.
+    right = !m || (std::abs(m->pose.theta_rad) <= options_.small_correction_rad &&
+                   (options_.member_check_max_shift_m <= 0.0 ||
+                    m->pose.translation().norm() <= options_.member_check_max_shift_m));
   }
   drawn_right_[id] = {right, in_anchor};
   return right;

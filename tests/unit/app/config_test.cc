@@ -379,6 +379,7 @@ slam2d:
     sparse_min_score: 0.75
     sparse_loop_edge_keyframes: 1
     member_check_exclusion_m: -1
+    member_check_max_shift_m: 0.35
     ambiguity_margin: 0.2
     ambiguous_min_score: 0.7
     support_min_separation_m: 0.5
@@ -406,6 +407,7 @@ slam2d:
   EXPECT_EQ(o.loop_closure.sparse_min_score, 0.75);
   EXPECT_EQ(o.loop_closure.sparse_loop_edge_keyframes, 1);
   EXPECT_EQ(o.loop_closure.member_check_exclusion_m, -1.0);
+  EXPECT_EQ(o.loop_closure.member_check_max_shift_m, 0.35);
   EXPECT_EQ(o.loop_closure.submap.ambiguity_margin, 0.2);
   EXPECT_EQ(o.loop_closure.ambiguous_min_score, 0.7);
   EXPECT_EQ(o.loop_closure.support_min_separation_m, 0.5);
@@ -426,6 +428,7 @@ TEST(Slam2dOptions, BadValuesAreRefusedNamingTheSection) {
                            "slam2d:\n  loop_closure:\n    min_match_points: -1\n",
                            "slam2d:\n  loop_closure:\n    rerender_checkpoints: -2\n",
                            "slam2d:\n  loop_closure:\n    ambiguity_margin: .nan\n",
+                           "slam2d:\n  loop_closure:\n    member_check_max_shift_m: -0.1\n",
                            "slam2d:\n  relock_after_large_step_m: -0.5\n"}) {
     const YamlFile file(text);
     Config config;

@@ -316,6 +316,42 @@ CloserRun closeAlong(const sim::VoxelWorld& world, const LoopClosureOptions& opt
   return {closer.stats(), closer.takeClosures()};
 }
 
+constexpr size_t kOffFirst = 40, kOffLast = 47;  // in the second submap of outAndAgain()'s first pass
+bool inOffStretch(size_t k) { return k >= kOffFirst && k <= kOffLast; }
+
+/// Closures along `truth` with keyframes kOffFirst–kOffLast drawn moved by
+/// `drawn_off` (map frame); every submap counts as sparse.
+std::vector<LoopCloser::Closure> closuresWithStretchDrawnOff(const sim::VoxelWorld& world, const std::vector<Pose2>& truth,
+                                                             const Pose2& drawn_off, LoopClosureOptions options) {
+  options.sparse_keyframe_spacing_m = 0.0;
+  return closeAlong(world, options, truth, 37, [&](size_t k, Keyframe& kf) {
+           if (!inOffStretch(k)) return;
+           kf.pose.x_m += drawn_off.x_m;
+           kf.pose.y_m += drawn_off.y_m;
+           kf.pose.theta_rad += drawn_off.theta_rad;
+         }).closures;
+}
+
+/// Without the check some closures reach the stretch and carry its error
+/// (`error` above `carried`); with it none is tied there and all are within `bound`.
+void expectStretchPassedOver(const std::vector<LoopCloser::Closure>& unchecked,
+                             const std::vector<LoopCloser::Closure>& checked,
+                             const std::function<double(const LoopCloser::Closure&)>& error, double carried, double bound) {
+  const size_t tied_off = std::count_if(unchecked.begin(), unchecked.end(),
+                                        [&](const LoopCloser::Closure& c) { return inOffStretch(c.match); });
+  ASSERT_GT(tied_off, 0u) << "no closure reached the stretch drawn off: the test shows nothing";
+  for (const LoopCloser::Closure& c : unchecked) {
+    if (inOffStretch(c.match)) {
+      EXPECT_GT(error(c), carried) << "a closure tied to the stretch carries its error";
+    }
+  }
+  ASSERT_GE(checked.size(), 3u);
+  for (const LoopCloser::Closure& c : checked) {
+    EXPECT_FALSE(inOffStretch(c.match)) << "closure " << c.query << " → " << c.match;
+    EXPECT_LT(error(c), bound) << "closure " << c.query << " → " << c.match;
+  }
+}
+
 // A sparse submap can hold a stretch the front end drew off (a turn on the
 // spot it got some degrees wrong, then right again). A scan matches the
 // submap as a whole, so its pose relative to a keyframe of that stretch
@@ -323,35 +359,33 @@ CloserRun closeAlong(const sim::VoxelWorld& world, const LoopClosureOptions& opt
 // (member_check_*), and without the check they are.
 TEST_F(SimulatedLoop, ClosuresAreNotTiedToKeyframesDrawnOff) {
   const std::vector<Pose2> truth = outAndAgain();
-  const size_t off_first = 40, off_last = 47;  // drawn 0.15 rad off, in the second submap of the first pass
   const auto closures = [&](double exclusion_m) {
     LoopClosureOptions options;
-    options.sparse_keyframe_spacing_m = 0.0;  // every submap counts as sparse
     options.member_check_exclusion_m = exclusion_m;
-    return closeAlong(*world_, options, truth, 37, [&](size_t k, Keyframe& kf) {
-             if (k >= off_first && k <= off_last) kf.pose.theta_rad += 0.15;
-           }).closures;
+    return closuresWithStretchDrawnOff(*world_, truth, Pose2{0.0, 0.0, 0.15}, options);
   };
-  const auto offStretch = [&](size_t k) { return k >= off_first && k <= off_last; };
   const auto headingError = [&](const LoopCloser::Closure& c) {
     return std::abs(normalizeAngle(c.relative.theta_rad - between(truth[c.match], truth[c.query]).theta_rad));
   };
-  const std::vector<LoopCloser::Closure> unchecked = closures(-1.0);
-  const size_t tied_off = std::count_if(unchecked.begin(), unchecked.end(),
-                                        [&](const LoopCloser::Closure& c) { return offStretch(c.match); });
-  ASSERT_GT(tied_off, 0u) << "no closure reached the stretch drawn off: the test shows nothing";
-  for (const LoopCloser::Closure& c : unchecked) {
-    if (offStretch(c.match)) {
-      EXPECT_GT(headingError(c), 0.1) << "a closure tied to the stretch carries its error";
-    }
-  }
+  expectStretchPassedOver(closures(-1.0), closures(LoopClosureOptions{}.member_check_exclusion_m), headingError, 0.1,
+                          0.03);
+}
 
-  const std::vector<LoopCloser::Closure> checked = closures(LoopClosureOptions{}.member_check_exclusion_m);
-  ASSERT_GE(checked.size(), 3u);
-  for (const LoopCloser::Closure& c : checked) {
-    EXPECT_FALSE(offStretch(c.match)) << "closure " << c.query << " → " << c.match;
-    EXPECT_LT(headingError(c), 0.03) << "closure " << c.query << " → " << c.match;
-  }
+// The same for a stretch drawn shifted, with member_check_max_shift_m (off by
+// default): a step the odometry got wrong sideways where the scan saw too
+// little to fix it (a turn into a new corridor) leaves the rest of the submap
+// drawn from it.
+TEST_F(SimulatedLoop, ClosuresAreNotTiedToKeyframesDrawnShifted) {
+  const std::vector<Pose2> truth = outAndAgain();
+  const auto closures = [&](double max_shift_m) {
+    LoopClosureOptions options;
+    options.member_check_max_shift_m = max_shift_m;
+    return closuresWithStretchDrawnOff(*world_, truth, Pose2{0.18, 0.18, 0.0}, options);
+  };
+  const auto translationError = [&](const LoopCloser::Closure& c) {
+    return (c.relative.translation() - between(truth[c.match], truth[c.query]).translation()).norm();
+  };
+  expectStretchPassedOver(closures(0.0), closures(0.2), translationError, 0.15, 0.1);
 }
 
 // The hold (confirm_after_s) only delays reports: the graph, and so the
@@ -515,6 +549,8 @@ TEST(LoopClosureOptions, BadOptionsThrow) {
   throws([](LoopClosureOptions& o) { o.member_check_window_m = 0.0; });
   throws([](LoopClosureOptions& o) { o.member_check_window_rad = -0.1; });
   throws([](LoopClosureOptions& o) { o.member_check_exclusion_m = std::nan(""); });
+  throws([](LoopClosureOptions& o) { o.member_check_max_shift_m = -0.1; });
+  throws([](LoopClosureOptions& o) { o.member_check_max_shift_m = NAN; });
   throws([](LoopClosureOptions& o) { o.support_min_separation_m = -1.0; });
   throws([](LoopClosureOptions& o) { o.support_wait_open_fraction = -0.1; });
   throws([](LoopClosureOptions& o) { o.support_wait_open_fraction = NAN; });
