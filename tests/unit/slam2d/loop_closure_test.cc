@@ -332,11 +332,13 @@ std::vector<LoopCloser::Closure> closuresWithStretchDrawnOff(const sim::VoxelWor
          }).closures;
 }
 
-/// Without the check some closures reach the stretch and carry its error
-/// (`error` above `carried`); with it none is tied there and all are within `bound`.
-void expectStretchPassedOver(const std::vector<LoopCloser::Closure>& unchecked,
-                             const std::vector<LoopCloser::Closure>& checked,
+/// With the stretch drawn off by `drawn_off`: under `unchecked` some closures
+/// reach the stretch and carry its error (`error` above `carried`); under
+/// `checked` none is tied there and all are within `bound`.
+void expectStretchPassedOver(const sim::VoxelWorld& world, const std::vector<Pose2>& truth, const Pose2& drawn_off,
+                             const LoopClosureOptions& unchecked_options, const LoopClosureOptions& checked_options,
                              const std::function<double(const LoopCloser::Closure&)>& error, double carried, double bound) {
+  const std::vector<LoopCloser::Closure> unchecked = closuresWithStretchDrawnOff(world, truth, drawn_off, unchecked_options);
   const size_t tied_off = std::count_if(unchecked.begin(), unchecked.end(),
                                         [&](const LoopCloser::Closure& c) { return inOffStretch(c.match); });
   ASSERT_GT(tied_off, 0u) << "no closure reached the stretch drawn off: the test shows nothing";
@@ -345,6 +347,7 @@ void expectStretchPassedOver(const std::vector<LoopCloser::Closure>& unchecked,
       EXPECT_GT(error(c), carried) << "a closure tied to the stretch carries its error";
     }
   }
+  const std::vector<LoopCloser::Closure> checked = closuresWithStretchDrawnOff(world, truth, drawn_off, checked_options);
   ASSERT_GE(checked.size(), 3u);
   for (const LoopCloser::Closure& c : checked) {
     EXPECT_FALSE(inOffStretch(c.match)) << "closure " << c.query << " → " << c.match;
@@ -359,16 +362,14 @@ void expectStretchPassedOver(const std::vector<LoopCloser::Closure>& unchecked,
 // (member_check_*), and without the check they are.
 TEST_F(SimulatedLoop, ClosuresAreNotTiedToKeyframesDrawnOff) {
   const std::vector<Pose2> truth = outAndAgain();
-  const auto closures = [&](double exclusion_m) {
-    LoopClosureOptions options;
-    options.member_check_exclusion_m = exclusion_m;
-    return closuresWithStretchDrawnOff(*world_, truth, Pose2{0.0, 0.0, 0.15}, options);
-  };
-  const auto headingError = [&](const LoopCloser::Closure& c) {
-    return std::abs(normalizeAngle(c.relative.theta_rad - between(truth[c.match], truth[c.query]).theta_rad));
-  };
-  expectStretchPassedOver(closures(-1.0), closures(LoopClosureOptions{}.member_check_exclusion_m), headingError, 0.1,
-                          0.03);
+  LoopClosureOptions unchecked;
+  unchecked.member_check_exclusion_m = -1.0;
+  expectStretchPassedOver(
+      *world_, truth, Pose2{0.0, 0.0, 0.15}, unchecked, LoopClosureOptions{},
+      [&](const LoopCloser::Closure& c) {
+        return std::abs(normalizeAngle(c.relative.theta_rad - between(truth[c.match], truth[c.query]).theta_rad));
+      },
+      0.1, 0.03);
 }
 
 // The same for a stretch drawn shifted, with member_check_max_shift_m (off by
@@ -377,15 +378,15 @@ TEST_F(SimulatedLoop, ClosuresAreNotTiedToKeyframesDrawnOff) {
 // drawn from it.
 TEST_F(SimulatedLoop, ClosuresAreNotTiedToKeyframesDrawnShifted) {
   const std::vector<Pose2> truth = outAndAgain();
-  const auto closures = [&](double max_shift_m) {
-    LoopClosureOptions options;
-    options.member_check_max_shift_m = max_shift_m;
-    return closuresWithStretchDrawnOff(*world_, truth, Pose2{0.18, 0.18, 0.0}, options);
-  };
-  const auto translationError = [&](const LoopCloser::Closure& c) {
-    return (c.relative.translation() - between(truth[c.match], truth[c.query]).translation()).norm();
-  };
-  expectStretchPassedOver(closures(0.0), closures(0.2), translationError, 0.15, 0.1);
+  LoopClosureOptions unchecked, checked;
+  unchecked.member_check_max_shift_m = 0.0;
+  checked.member_check_max_shift_m = 0.2;
+  expectStretchPassedOver(
+      *world_, truth, Pose2{0.18, 0.18, 0.0}, unchecked, checked,
+      [&](const LoopCloser::Closure& c) {
+        return (c.relative.translation() - between(truth[c.match], truth[c.query]).translation()).norm();
+      },
+      0.15, 0.1);
 }
 
 // The hold (confirm_after_s) only delays reports: the graph, and so the
