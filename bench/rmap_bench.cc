@@ -171,6 +171,10 @@ int main(int argc, char** argv) {
   d->add_option("--member-check-exclusion", slam2d.slam.loop_closure.member_check_exclusion_m,
                 "a sparse submap's keyframe is tied to only if the submap without the views within this distance (m) "
                 "places it where it is drawn (< 0: no check)");
+  d->add_option("--member-check-near-exclusion", slam2d.slam.loop_closure.member_check_near_exclusion_m,
+                "the check runs again without the views within this distance (m) only (≤ 0: once)");
+  d->add_option("--member-check-max-turn", slam2d.slam.loop_closure.member_check_max_turn_rad,
+                "that check rules out a keyframe the submap turns by more than this (rad)");
   d->add_option("--member-check-max-shift", slam2d.slam.loop_closure.member_check_max_shift_m,
                 "that check also rules out a keyframe the submap shifts by more than this (m; 0: the heading alone)");
   d->add_option("--sequential-sigma-m-per-m", slam2d.slam.loop_closure.sequential_sigma_m_per_m,

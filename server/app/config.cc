@@ -160,6 +160,8 @@ void readSlam2dLoopClosure(Section& s, slam2d::LoopClosureOptions& loop) {
   s.read("sparse_min_score", loop.sparse_min_score);
   s.read("sparse_loop_edge_keyframes", loop.sparse_loop_edge_keyframes);
   s.read("member_check_exclusion_m", loop.member_check_exclusion_m);
+  s.read("member_check_near_exclusion_m", loop.member_check_near_exclusion_m);
+  s.read("member_check_max_turn_rad", loop.member_check_max_turn_rad);
   s.read("member_check_max_shift_m", loop.member_check_max_shift_m);
   s.read("ambiguity_margin", loop.submap.ambiguity_margin);
   s.read("ambiguous_min_score", loop.ambiguous_min_score);

@@ -47,11 +47,13 @@ void LoopClosureOptions::validate() const {
   requireLoopOption(ambiguous_min_score >= 0.0 && ambiguous_min_score <= 1.0, "ambiguous_min_score must be in [0, 1]");
   requireLoopOption(min_match_points >= 0, "min_match_points must be ≥ 0");
   requireLoopOption(sparse_loop_edge_keyframes >= 0, "sparse_loop_edge_keyframes must be ≥ 0");
-  requireLoopOption(std::isfinite(member_check_exclusion_m) && positive(member_check_window_m) && member_check_window_m <= 5.0 &&
+  requireLoopOption(std::isfinite(member_check_exclusion_m) && std::isfinite(member_check_near_exclusion_m) &&
+                        positive(member_check_window_m) && member_check_window_m <= 5.0 &&
                         nonNegative(member_check_window_rad) && member_check_window_rad <= 3.14159 &&
-                        nonNegative(member_check_max_shift_m) && member_check_max_shift_m <= 5.0,
-                    "need a finite member_check_exclusion_m, 0 < member_check_window_m ≤ 5, 0 ≤ member_check_window_rad ≤ π, "
-                    "0 ≤ member_check_max_shift_m ≤ 5");
+                        nonNegative(member_check_max_shift_m) && member_check_max_shift_m <= 5.0 &&
+                        nonNegative(member_check_max_turn_rad) && member_check_max_turn_rad <= 3.14159,
+                    "need finite member_check_exclusion_m and member_check_near_exclusion_m, 0 < member_check_window_m ≤ 5, "
+                    "0 ≤ member_check_window_rad ≤ π, 0 ≤ member_check_max_shift_m ≤ 5, 0 ≤ member_check_max_turn_rad ≤ π");
   requireLoopOption(sparse_raster_dilation_cells >= 0 && sparse_raster_dilation_cells <= 10 && submap.raster_dilation_cells >= 0 &&
                         submap.raster_dilation_cells <= 10,
                     "raster dilation must be in [0, 10] cells");
@@ -277,43 +279,47 @@ bool LoopCloser::drawnRight(const std::vector<Keyframe>& keyframes, size_t subma
     if (moved.translation().norm() <= options_.rerender_shift_m && std::abs(moved.theta_rad) <= options_.rerender_shift_rad)
       return known->second.right;
   }
+  // A stretch drawn off as a whole needs the wide exclusion; a single scan of a turn drawn off alone, the near one.
+  bool right = fitsViewsBeyond(keyframes, info, member, options_.member_check_exclusion_m);
+  if (right && options_.member_check_near_exclusion_m > 0.0)
+    right = fitsViewsBeyond(keyframes, info, member, options_.member_check_near_exclusion_m);
+  drawn_right_[id] = {right, in_anchor};
+  return right;
+}
+
+bool LoopCloser::fitsViewsBeyond(const std::vector<Keyframe>& keyframes, const SubmapInfo& info, const Keyframe& member,
+                                 double exclusion_m) {
   std::vector<const Keyframe*> elsewhere;
   bool observes = false;
   for (size_t k : info.keyframes) {
-    if ((keyframes[k].pose.translation() - member.pose.translation()).norm() <= options_.member_check_exclusion_m) continue;
+    if ((keyframes[k].pose.translation() - member.pose.translation()).norm() <= exclusion_m) continue;
     elsewhere.push_back(&keyframes[k]);
     observes = observes || !keyframes[k].ends_robot.empty();
   }
-  bool right = true;  // no views from elsewhere, or no pose they fit: nothing speaks against it
-  if (observes && !member.match_points.empty()) {
-    ++stats_.member_checks;
-    SubmapMatcherOptions check = options_.submap;
-    check.raster_dilation_cells = options_.sparse_raster_dilation_cells;
-    check.occupancy.miss_log_odds = 0.0f;  // the match reads where beams ended; the ray walk would cost most
-    check.ambiguity_margin = 0.0;
-    check.correlative.fast_window_m = options_.member_check_window_m;
-    check.correlative.branch_levels = 3;  // the window is a few cells
-    check.resolution_m *= 2.0;  // a heading off by small_correction_rad still moves points 4 m out by 2 cells
-    check.levels = 1;
-    check.max_refinement_shift_m = options_.member_check_window_m;  // the window bounds the answer already
-    check.max_refinement_shift_rad = options_.member_check_window_rad;
-    std::optional<SubmapMatcher> views;
-    try {
-      views.emplace(elsewhere, member.pose, check);
-    } catch (const std::invalid_argument&) {
-      // Every return of the other views lies beyond their range cut: they draw no cell.
-    }
-    const std::optional<SubmapMatch> m =
-        views ? views->match(member.match_points, Pose2{}, options_.member_check_window_m, options_.member_check_window_rad,
-                             options_.min_score)
-              : std::nullopt;
-    // A shift only beyond member_check_max_shift_m: along a corridor this match is weakest.
-    right = !m || (std::abs(m->pose.theta_rad) <= options_.small_correction_rad &&
-                   (options_.member_check_max_shift_m <= 0.0 ||
-                    m->pose.translation().norm() <= options_.member_check_max_shift_m));
+  // No views from elsewhere, or no pose they fit: nothing speaks against it.
+  if (!observes || member.match_points.empty()) return true;
+  ++stats_.member_checks;
+  SubmapMatcherOptions check = options_.submap;
+  check.raster_dilation_cells = options_.sparse_raster_dilation_cells;
+  check.occupancy.miss_log_odds = 0.0f;  // the match reads where beams ended; the ray walk would cost most
+  check.ambiguity_margin = 0.0;
+  check.correlative.fast_window_m = options_.member_check_window_m;
+  check.correlative.branch_levels = 3;  // the window is a few cells
+  check.resolution_m *= 2.0;  // a heading off by member_check_max_turn_rad still moves points 4 m out by 2 cells
+  check.levels = 1;
+  check.max_refinement_shift_m = options_.member_check_window_m;  // the window bounds the answer already
+  check.max_refinement_shift_rad = options_.member_check_window_rad;
+  std::optional<SubmapMatcher> views;
+  try {
+    views.emplace(elsewhere, member.pose, check);
+  } catch (const std::invalid_argument&) {
+    return true;  // every return of the other views lies beyond their range cut: they draw no cell
   }
-  drawn_right_[id] = {right, in_anchor};
-  return right;
+  const std::optional<SubmapMatch> m = views->match(member.match_points, Pose2{}, options_.member_check_window_m,
+                                                    options_.member_check_window_rad, options_.min_score);
+  // A shift only beyond member_check_max_shift_m: along a corridor this match is weakest.
+  return !m || (std::abs(m->pose.theta_rad) <= options_.member_check_max_turn_rad &&
+                (options_.member_check_max_shift_m <= 0.0 || m->pose.translation().norm() <= options_.member_check_max_shift_m));
 }
 
 const SubmapMatcher& LoopCloser::matcher(const std::vector<Keyframe>& keyframes, size_t submap) {

@@ -127,13 +127,24 @@ struct LoopClosureOptions {
   /// keyframe's points are matched against the submap drawn without the views
   /// from within member_check_exclusion_m of it, within ±member_check_window_m
   /// and ±member_check_window_rad; a keyframe they turn by more than
-  /// small_correction_rad, or shift by more than member_check_max_shift_m, from
-  /// where it is drawn is not tied to, the next nearest is (of the
+  /// member_check_max_turn_rad, or shift by more than member_check_max_shift_m,
+  /// from where it is drawn is not tied to, the next nearest is (of the
   /// 2 · sparse_loop_edge_keyframes nearest; none left: no closure).
   /// member_check_exclusion_m < 0: no check.
+  ///
+  /// The exclusion must cover the stretch that shares the keyframe's error, or
+  /// the stretch vouches for it: 1 m leaves out a turn's other scans and a
+  /// stretch drawn off as a whole. But a single scan of a turn drawn off alone
+  /// can fit the views beyond 1 m (the CSAIL subset's scan 84, 6° off by the
+  /// log, turned 0.03 rad by them) while the scans just before and after the
+  /// turn place it right. So the check runs again without the views within
+  /// member_check_near_exclusion_m only (≤ 0: once), and either verdict against
+  /// a keyframe rules it out.
   double member_check_exclusion_m = 1.0;
+  double member_check_near_exclusion_m = 0.3;
   double member_check_window_m = 0.3;
   double member_check_window_rad = 0.2;
+  double member_check_max_turn_rad = 0.05;
   /// Metres; 0 (the default): the heading alone decides. What a bound catches:
   /// a step the odometry got wrong sideways where the scan saw too little to
   /// fix it (infinite-corridor's turn at scan 135, 0.43 m) leaves the submap
@@ -381,6 +392,10 @@ class LoopCloser {
   /// Whether member `index` of `submap` sits where the submap's views from
   /// elsewhere place it (member_check_*).
   bool drawnRight(const std::vector<Keyframe>& keyframes, size_t submap, size_t index);
+  /// Whether `member`'s points fit where it is drawn against its submap's
+  /// views beyond exclusion_m of it (true when they draw nothing or fit nowhere).
+  bool fitsViewsBeyond(const std::vector<Keyframe>& keyframes, const SubmapInfo& info, const Keyframe& member,
+                       double exclusion_m);
   const SubmapMatcher& matcher(const std::vector<Keyframe>& keyframes, size_t submap);
   /// The map-frame motion that moves the query keyframe where the closure says it is.
   Pose2 correction(const Pending& pending) const;

@@ -379,6 +379,8 @@ slam2d:
     sparse_min_score: 0.75
     sparse_loop_edge_keyframes: 1
     member_check_exclusion_m: -1
+    member_check_near_exclusion_m: 0
+    member_check_max_turn_rad: 0.08
     member_check_max_shift_m: 0.35
     ambiguity_margin: 0.2
     ambiguous_min_score: 0.7
@@ -407,6 +409,8 @@ slam2d:
   EXPECT_EQ(o.loop_closure.sparse_min_score, 0.75);
   EXPECT_EQ(o.loop_closure.sparse_loop_edge_keyframes, 1);
   EXPECT_EQ(o.loop_closure.member_check_exclusion_m, -1.0);
+  EXPECT_EQ(o.loop_closure.member_check_near_exclusion_m, 0.0);
+  EXPECT_EQ(o.loop_closure.member_check_max_turn_rad, 0.08);
   EXPECT_EQ(o.loop_closure.member_check_max_shift_m, 0.35);
   EXPECT_EQ(o.loop_closure.submap.ambiguity_margin, 0.2);
   EXPECT_EQ(o.loop_closure.ambiguous_min_score, 0.7);
@@ -429,6 +433,8 @@ TEST(Slam2dOptions, BadValuesAreRefusedNamingTheSection) {
                            "slam2d:\n  loop_closure:\n    rerender_checkpoints: -2\n",
                            "slam2d:\n  loop_closure:\n    ambiguity_margin: .nan\n",
                            "slam2d:\n  loop_closure:\n    member_check_max_shift_m: -0.1\n",
+                           "slam2d:\n  loop_closure:\n    member_check_max_turn_rad: 4\n",
+                           "slam2d:\n  loop_closure:\n    member_check_near_exclusion_m: .nan\n",
                            "slam2d:\n  relock_after_large_step_m: -0.5\n"}) {
     const YamlFile file(text);
     Config config;

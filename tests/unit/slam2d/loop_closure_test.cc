@@ -316,16 +316,20 @@ CloserRun closeAlong(const sim::VoxelWorld& world, const LoopClosureOptions& opt
   return {closer.stats(), closer.takeClosures()};
 }
 
-constexpr size_t kOffFirst = 40, kOffLast = 47;  // in the second submap of outAndAgain()'s first pass
-bool inOffStretch(size_t k) { return k >= kOffFirst && k <= kOffLast; }
+/// Keyframes first–last of outAndAgain()'s first pass, drawn off.
+struct DrawnOffStretch {
+  size_t first = 0, last = 0;
+  bool holds(size_t k) const { return k >= first && k <= last; }
+};
 
-/// Closures along `truth` with keyframes kOffFirst–kOffLast drawn moved by
+/// Closures along `truth` with the stretch's keyframes drawn moved by
 /// `drawn_off` (map frame); every submap counts as sparse.
 std::vector<LoopCloser::Closure> closuresWithStretchDrawnOff(const sim::VoxelWorld& world, const std::vector<Pose2>& truth,
-                                                             const Pose2& drawn_off, LoopClosureOptions options) {
+                                                             const DrawnOffStretch& stretch, const Pose2& drawn_off,
+                                                             LoopClosureOptions options) {
   options.sparse_keyframe_spacing_m = 0.0;
   return closeAlong(world, options, truth, 37, [&](size_t k, Keyframe& kf) {
-           if (!inOffStretch(k)) return;
+           if (!stretch.holds(k)) return;
            kf.pose.x_m += drawn_off.x_m;
            kf.pose.y_m += drawn_off.y_m;
            kf.pose.theta_rad += drawn_off.theta_rad;
@@ -335,25 +339,34 @@ std::vector<LoopCloser::Closure> closuresWithStretchDrawnOff(const sim::VoxelWor
 /// With the stretch drawn off by `drawn_off`: under `unchecked` some closures
 /// reach the stretch and carry its error (`error` above `carried`); under
 /// `checked` none is tied there and all are within `bound`.
-void expectStretchPassedOver(const sim::VoxelWorld& world, const std::vector<Pose2>& truth, const Pose2& drawn_off,
-                             const LoopClosureOptions& unchecked_options, const LoopClosureOptions& checked_options,
+void expectStretchPassedOver(const sim::VoxelWorld& world, const std::vector<Pose2>& truth, const DrawnOffStretch& stretch,
+                             const Pose2& drawn_off, const LoopClosureOptions& unchecked_options,
+                             const LoopClosureOptions& checked_options,
                              const std::function<double(const LoopCloser::Closure&)>& error, double carried, double bound) {
-  const std::vector<LoopCloser::Closure> unchecked = closuresWithStretchDrawnOff(world, truth, drawn_off, unchecked_options);
+  const std::vector<LoopCloser::Closure> unchecked =
+      closuresWithStretchDrawnOff(world, truth, stretch, drawn_off, unchecked_options);
   const size_t tied_off = std::count_if(unchecked.begin(), unchecked.end(),
-                                        [&](const LoopCloser::Closure& c) { return inOffStretch(c.match); });
+                                        [&](const LoopCloser::Closure& c) { return stretch.holds(c.match); });
   ASSERT_GT(tied_off, 0u) << "no closure reached the stretch drawn off: the test shows nothing";
   for (const LoopCloser::Closure& c : unchecked) {
-    if (inOffStretch(c.match)) {
+    if (stretch.holds(c.match)) {
       EXPECT_GT(error(c), carried) << "a closure tied to the stretch carries its error";
     }
   }
-  const std::vector<LoopCloser::Closure> checked = closuresWithStretchDrawnOff(world, truth, drawn_off, checked_options);
+  const std::vector<LoopCloser::Closure> checked = closuresWithStretchDrawnOff(world, truth, stretch, drawn_off, checked_options);
   ASSERT_GE(checked.size(), 3u);
   for (const LoopCloser::Closure& c : checked) {
-    EXPECT_FALSE(inOffStretch(c.match)) << "closure " << c.query << " → " << c.match;
+    EXPECT_FALSE(stretch.holds(c.match)) << "closure " << c.query << " → " << c.match;
     EXPECT_LT(error(c), bound) << "closure " << c.query << " → " << c.match;
   }
 }
+
+/// A closure's heading error against the truth along `truth`.
+double headingError(const std::vector<Pose2>& truth, const LoopCloser::Closure& c) {
+  return std::abs(normalizeAngle(c.relative.theta_rad - between(truth[c.match], truth[c.query]).theta_rad));
+}
+
+constexpr DrawnOffStretch kTurnedStretch{40, 47};  // in the second submap of outAndAgain()'s first pass
 
 // A sparse submap can hold a stretch the front end drew off (a turn on the
 // spot it got some degrees wrong, then right again). A scan matches the
@@ -365,11 +378,21 @@ TEST_F(SimulatedLoop, ClosuresAreNotTiedToKeyframesDrawnOff) {
   LoopClosureOptions unchecked;
   unchecked.member_check_exclusion_m = -1.0;
   expectStretchPassedOver(
-      *world_, truth, Pose2{0.0, 0.0, 0.15}, unchecked, LoopClosureOptions{},
-      [&](const LoopCloser::Closure& c) {
-        return std::abs(normalizeAngle(c.relative.theta_rad - between(truth[c.match], truth[c.query]).theta_rad));
-      },
-      0.1, 0.03);
+      *world_, truth, kTurnedStretch, Pose2{0.0, 0.0, 0.15}, unchecked, LoopClosureOptions{},
+      [&](const LoopCloser::Closure& c) { return headingError(truth, c); }, 0.1, 0.03);
+}
+
+// One keyframe drawn off alone: the views beyond member_check_exclusion_m
+// (1 m) may see too little of what it saw to place it anywhere (here they fit
+// it nowhere, which speaks neither way); the views beyond
+// member_check_near_exclusion_m place it 0.1 rad from where it is drawn.
+TEST_F(SimulatedLoop, ClosuresAreNotTiedToAKeyframeDrawnOffAlone) {
+  const std::vector<Pose2> truth = outAndAgain();
+  LoopClosureOptions wide_only;
+  wide_only.member_check_near_exclusion_m = 0.0;
+  expectStretchPassedOver(
+      *world_, truth, DrawnOffStretch{30, 30}, Pose2{0.0, 0.0, 0.1}, wide_only, LoopClosureOptions{},
+      [&](const LoopCloser::Closure& c) { return headingError(truth, c); }, 0.08, 0.03);
 }
 
 // The same for a stretch drawn shifted, with member_check_max_shift_m (off by
@@ -382,7 +405,7 @@ TEST_F(SimulatedLoop, ClosuresAreNotTiedToKeyframesDrawnShifted) {
   unchecked.member_check_max_shift_m = 0.0;
   checked.member_check_max_shift_m = 0.2;
   expectStretchPassedOver(
-      *world_, truth, Pose2{0.18, 0.18, 0.0}, unchecked, checked,
+      *world_, truth, kTurnedStretch, Pose2{0.18, 0.18, 0.0}, unchecked, checked,
       [&](const LoopCloser::Closure& c) {
         return (c.relative.translation() - between(truth[c.match], truth[c.query]).translation()).norm();
       },
@@ -464,7 +487,8 @@ TEST_F(SimulatedLoop, SupportComesFromAnotherView) {
 // of the distance travelled without a closure, not only support_keyframes:
 // here the second pass's only two views with match points (against different
 // submaps) lie more keyframes apart than support_keyframes, but within that
-// share of the open loop.
+// share of the open loop. The first pass only draws the map (none of its
+// keyframes searches), so the open loop spans all of it.
 TEST_F(SimulatedLoop, SparseClosuresWaitForAShareOfTheOpenLoop) {
   const std::vector<Pose2> truth = outAndAgain();
   size_t second_pass = 1;
@@ -481,7 +505,7 @@ TEST_F(SimulatedLoop, SparseClosuresWaitForAShareOfTheOpenLoop) {
     options.search_every_keyframes = 1;
     options.support_wait_open_fraction = wait_open_fraction;
     return closeAlong(*world_, options, truth, 38, [&](size_t k, Keyframe& kf) {
-      if (k >= second_pass && !views.empty() && std::find(views.begin(), views.end(), k) == views.end())
+      if (k < second_pass || (!views.empty() && std::find(views.begin(), views.end(), k) == views.end()))
         kf.match_points.clear();
     });
   };
@@ -552,6 +576,8 @@ TEST(LoopClosureOptions, BadOptionsThrow) {
   throws([](LoopClosureOptions& o) { o.member_check_exclusion_m = std::nan(""); });
   throws([](LoopClosureOptions& o) { o.member_check_max_shift_m = -0.1; });
   throws([](LoopClosureOptions& o) { o.member_check_max_shift_m = NAN; });
+  throws([](LoopClosureOptions& o) { o.member_check_near_exclusion_m = INFINITY; });
+  throws([](LoopClosureOptions& o) { o.member_check_max_turn_rad = -0.01; });
   throws([](LoopClosureOptions& o) { o.support_min_separation_m = -1.0; });
   throws([](LoopClosureOptions& o) { o.support_wait_open_fraction = -0.1; });
   throws([](LoopClosureOptions& o) { o.support_wait_open_fraction = NAN; });
