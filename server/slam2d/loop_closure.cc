@@ -280,9 +280,15 @@ bool LoopCloser::drawnRight(const std::vector<Keyframe>& keyframes, size_t subma
       return known->second.right;
   }
   // A stretch drawn off as a whole needs the wide exclusion; a single scan of a turn drawn off alone, the near one.
-  bool right = fitsViewsBeyond(keyframes, info, member, options_.member_check_exclusion_m);
-  if (right && options_.member_check_near_exclusion_m > 0.0)
-    right = fitsViewsBeyond(keyframes, info, member, options_.member_check_near_exclusion_m);
+  const double wide_m = options_.member_check_exclusion_m, near_m = options_.member_check_near_exclusion_m;
+  bool right = fitsViewsBeyond(keyframes, info, member, wide_m);
+  // The second check only where some view lies between the two distances: elsewhere it would repeat the first.
+  const auto between_exclusions = [&](size_t k) {
+    const double d = (keyframes[k].pose.translation() - member.pose.translation()).norm();
+    return d > std::min(near_m, wide_m) && d <= std::max(near_m, wide_m);
+  };
+  if (right && near_m > 0.0 && std::any_of(info.keyframes.begin(), info.keyframes.end(), between_exclusions))
+    right = fitsViewsBeyond(keyframes, info, member, near_m);
   drawn_right_[id] = {right, in_anchor};
   return right;
 }
