@@ -126,6 +126,8 @@ int main(int argc, char** argv) {
   d->add_option("--coarse-iterations", slam2d.slam.matcher.coarse_iterations, "Gauss-Newton iterations per coarse level");
   d->add_option("--fine-iterations", slam2d.slam.matcher.fine_iterations, "Gauss-Newton iterations on the finest level");
   d->add_option("--matcher-damping", slam2d.slam.matcher.damping, "Levenberg damping of the scan matcher, relative to the Hessian trace");
+  d->add_option("--value-floor", slam2d.slam.occupancy.value_floor_probability,
+                "occupancy probability the scan matcher reads as empty (0: it reads the probability itself)");
   d->add_option("--sparse-search-without-odometry-rad", slam2d.slam.sparse_search_without_odometry_rad,
                 "heading half-width (rad) of a sparse trajectory's search without odometry");
   d->add_option("--search-rotation-weight", slam2d.slam.search_without_odometry_rotation_weight,

@@ -107,7 +107,8 @@ json slamOptionsJson(const slam2d::Slam2dOptions& o) {
           {"use_odometry", o.use_odometry},
           {"odometry_information_xy", o.odometry_information_xy},
           {"odometry_information_theta", o.odometry_information_theta},
-          {"reflectivity_weight", o.reflectivity_weight}};
+          {"reflectivity_weight", o.reflectivity_weight},
+          {"value_floor_probability", o.occupancy.value_floor_probability}};
 }
 
 void writePoses(const std::string& path, const std::vector<Slam2dInput>& inputs, const std::vector<Pose2>& poses) {

@@ -1,5 +1,6 @@
 #include "slam2d/occupancy_grid.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -62,7 +63,8 @@ OccupancyGrid::Sample OccupancyGrid::sample(const Eigen::Vector2d& p_m) const {
   // A known cell at a clamp bound stays there (most free cells, once mapped): its value holds it.
   if (known && log_odds == cell.log_odds) return;
   cell.log_odds = log_odds;
-  cell.value = 1.0f / (1.0f + std::exp(-log_odds));
+  const float p = 1.0f / (1.0f + std::exp(-log_odds));
+  cell.value = std::max(0.0f, (p - update.value_floor_probability) / (1.0f - update.value_floor_probability));
 }
 
 // Inlined into the ray walk, which calls it for every crossed cell: as a call it cost

@@ -23,6 +23,15 @@ struct OccupancyUpdate {
   float miss_log_odds = -0.4f;  ///< added to each cell a beam crossed (< 0; 0: the beams' ends only, no ray walk)
   float min_log_odds = -2.0f;   ///< clamping keeps cells able to change their mind
   float max_log_odds = 3.5f;
+  /// The matcher reads a cell of occupancy probability p as max(0, (p − floor) / (1 − floor)),
+  /// unknown cells as 0. A cell crossed by few rays keeps p 0.3–0.4 (one miss: 0.40): read as p,
+  /// such cells raise the map in front of a wall seen from afar, and Gauss–Newton pulls the
+  /// scan toward the observer, so steps along a corridor come out short (0.12 % of their length
+  /// on infinite-corridor, 0.3 % at 2.5 cm cells). A floor of 0.3 removes that there, but on
+  /// other logs the steps then come out long and a sparse simulated tour drifts more: off until
+  /// that is understood (BENCHMARKS §4, *The front end's steps come out short*).
+  /// In [0, 1); 0 reads p itself.
+  float value_floor_probability = 0.0f;
 };
 
 /// A beam for insertion, map frame (m): from the sensor to its end. Without
@@ -34,7 +43,8 @@ struct Ray {
 
 class OccupancyGrid {
  public:
-  /// Interpolated map value M ∈ [0, 1] (occupancy probability, unknown = 0)
+  /// Interpolated map value M ∈ [0, 1] (occupancy probability above
+  /// OccupancyUpdate::value_floor_probability, rescaled; unknown = 0)
   /// and its gradient (per metre) at a point.
   struct Sample {
     float value = 0.0f;
@@ -74,7 +84,7 @@ class OccupancyGrid {
  private:
   struct Cell {
     float log_odds = std::numeric_limits<float>::quiet_NaN();
-    float value = 0.0f;   ///< occupancy probability, 0 while unknown (the matcher reads this)
+    float value = 0.0f;   ///< what the matcher reads (see value_floor_probability), 0 while unknown
     uint32_t mark = 0;    ///< 2·insertion + (1 if hit) of the last change
   };
 

@@ -96,6 +96,8 @@ void Slam2dOptions::validate() const {
   require(occupancy.hit_log_odds > 0.0f && occupancy.miss_log_odds < 0.0f &&
               occupancy.min_log_odds < 0.0f && occupancy.max_log_odds > 0.0f,
           "occupancy: need hit > 0 > miss and min < 0 < max");
+  require(occupancy.value_floor_probability >= 0.0f && occupancy.value_floor_probability < 1.0f,
+          "occupancy.value_floor_probability must be in [0, 1)");
   require(matcher.coarse_iterations >= 0 && matcher.fine_iterations >= 0, "matcher iterations must be ≥ 0");
   require(matcher.damping >= 0.0 && matcher.max_step_cells > 0.0 && matcher.max_step_rad > 0.0,
           "matcher damping ≥ 0 and step bounds > 0");

@@ -96,6 +96,18 @@ TEST(OccupancyGrid, BilinearValueSitsAtCellCentres) {
   EXPECT_EQ(none.gradient_per_m, Eigen::Vector2f::Zero());
 }
 
+TEST(OccupancyGrid, ReadsProbabilityAboveAFloor) {
+  OccupancyUpdate update = kUpdate;
+  update.value_floor_probability = 0.3f;
+  OccupancyGrid grid(0.5);
+  grid.insert({0.25, 0.25}, std::vector<Ray>{{{1.75, 0.25}, true}}, update, 100.0);  // cells 0..2 free, 3 hit
+  EXPECT_FLOAT_EQ(grid.logOdds({2, 0}), update.miss_log_odds) << "the evidence itself is unchanged";
+  EXPECT_NEAR(grid.sample({1.25, 0.25}).value, (prob(update.miss_log_odds) - 0.3f) / 0.7f, 1e-6);
+  EXPECT_NEAR(grid.sample({1.75, 0.25}).value, (prob(update.hit_log_odds) - 0.3f) / 0.7f, 1e-6);
+  for (int k = 0; k < 2; ++k) grid.insert({0.25, 0.25}, std::vector<Ray>{{{1.75, 0.25}, true}}, update, 100.0);
+  EXPECT_EQ(grid.sample({1.25, 0.25}).value, 0.0f) << "crossed three times (p = 0.23): read as unknown";
+}
+
 TEST(OccupancyGrid, GradientMatchesFiniteDifferencesAcrossChunkBorders) {
   OccupancyGrid grid(0.1);
   // A fan of rays over a chunk border (64 cells = 6.4 m) in x and y.

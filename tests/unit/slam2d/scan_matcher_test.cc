@@ -20,10 +20,11 @@ std::vector<MatchPoint> endpoints(const LaserScan& scan) {
   return points;
 }
 
-void insertAt(GridMap2d& map, const Pose2& pose, const std::vector<MatchPoint>& points) {
+void insertAt(GridMap2d& map, const Pose2& pose, const std::vector<MatchPoint>& points,
+              const OccupancyUpdate& update = {}) {
   std::vector<Ray> rays;
   for (const MatchPoint& p : points) rays.push_back({pose * p.p_m, true});
-  map.insert(pose.translation(), rays, OccupancyUpdate{}, 100.0);
+  map.insert(pose.translation(), rays, update, 100.0);
 }
 
 class SimulatedRoom : public ::testing::Test {
@@ -147,6 +148,41 @@ TEST(ScanMatcher, ARotationWeightKeepsTheSearchFromTurningOntoALookAlike) {
   options.search_rotation_weight = 20.0;  // a 0.4 rad turn keeps 4 % of its score, 2° keeps 98 %
   // Near the guess: the coarsest level (0.2 m cells) barely tells 3° apart at these ranges.
   EXPECT_NEAR(matchScan(map, scan, guess, std::nullopt, options).pose.theta_rad, 0.0, 0.06);
+}
+
+TEST(ScanMatcher, AWallSeenOnceFromAfarPullsTheScanBackUnlessReadAboveAFloor) {
+  // A corridor's end wall 6 m ahead, mapped from one scan (range noise 2 cm),
+  // then scanned again 1 m closer. The cells its rays crossed once hold
+  // little free evidence (p = 0.40) while the unknown cells behind the wall
+  // read 0: the map rises in front of the wall, and Gauss–Newton pulls the
+  // new endpoints toward the observer (the step comes out short).
+  const auto mean_step_error_m = [](float value_floor_probability) {
+    std::mt19937_64 rng(21);
+    std::normal_distribution<double> noise_m(0.0, 0.02);
+    const auto scanFrom = [&](double x_m) {
+      std::vector<MatchPoint> scan = corridorWalls(-x_m, 6.0 - x_m, 1.025, -1.025);
+      for (double y = -1.0; y <= 1.0; y += 0.02) {
+        const Eigen::Vector2d end(6.0 - x_m, y);
+        scan.push_back({end * (1.0 + noise_m(rng) / end.norm())});
+      }
+      return scan;
+    };
+    OccupancyUpdate update;
+    update.value_floor_probability = value_floor_probability;
+    double sum_m = 0.0;
+    const int trials = 20;
+    for (int k = 0; k < trials; ++k) {
+      GridMap2d map(0.05, 3);
+      insertAt(map, Pose2{}, scanFrom(0.0), update);
+      const Pose2 truth{1.0, 0.0, 0.0};
+      sum_m += matchScan(map, scanFrom(1.0), truth, std::nullopt, ScanMatcherOptions{}).pose.x_m - truth.x_m;
+    }
+    return sum_m / trials;
+  };
+  const double read_as_p_m = mean_step_error_m(0.0f);
+  EXPECT_LT(read_as_p_m, -0.008) << "read as p, the scan is pulled back";
+  // Above a floor of 0.3 the crossed cells read (almost) as the unknown ones.
+  EXPECT_LT(std::abs(mean_step_error_m(0.3f)), 0.2 * std::abs(read_as_p_m));
 }
 
 TEST(ScanMatcher, ReturnsTheInitialGuessWithNothingToMatch) {

@@ -338,6 +338,8 @@ TEST(Slam2d, RejectsBadOptions) {
       [](Slam2dOptions& o) { o.levels = 0; },
       [](Slam2dOptions& o) { o.range_max_m = o.range_min_m; },
       [](Slam2dOptions& o) { o.occupancy.hit_log_odds = -1.0f; },
+      [](Slam2dOptions& o) { o.occupancy.value_floor_probability = 1.0f; },
+      [](Slam2dOptions& o) { o.occupancy.value_floor_probability = NAN; },
       [](Slam2dOptions& o) { o.incidence.window_m = 0.0; },
       [](Slam2dOptions& o) { o.relock_search_m = -1.0; },
       [](Slam2dOptions& o) { o.relock_after_large_step_m = NAN; },
