@@ -84,6 +84,13 @@ int main(int argc, char** argv) {
                 "CARMEN log whose scan poses at the same stamps are the reference for ATE/RPE (default: the log's own)");
   d->add_option("--stamps-from", slam2d.stamps_path,
                 "CARMEN log holding the same scans with the stamps the relations use (a corrected log's raw log)");
+  CLI::Option* period = d->add_option("--relations-period", slam2d.relations_scan_period_s,
+                                      "seconds between the relations' scans: place the relations by counting scans "
+                                      "instead of by stamp (a log whose stamps were rewritten)")
+                            ->check(CLI::PositiveNumber);
+  d->add_option("--relations-first-scan", slam2d.relations_first_scan,
+                "with --relations-period: 0-based index of the scan at the relations' earliest stamp")
+      ->needs(period);
   d->add_option("--json", slam2d.json_out, "write results as JSON to this file");
   d->add_option("--poses", slam2d.poses_out, "write the estimated laser poses (stamp_s x y theta) to this file");
   d->add_option("--revisits", slam2d.revisits_out,

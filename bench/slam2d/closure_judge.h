@@ -164,7 +164,14 @@ size_t markContradictedPoses(ClosureJudge& judge, const std::vector<datasets::Sl
 ///         same bounds: closures_judged_by_relations, false_by_relations (null
 ///         when no relation names two scans of the run),
 ///         worst_error_by_relations_m, and by_relations in the list (error_m,
-///         error_deg, false, relations chained, bridge_scans, bridge_m)
+///         error_deg, false, relations chained, bridge_scans, bridge_m); with
+///         run.scan_points, the scan check of each false verdict by the
+///         relations, the match's local map drawn by the estimate (the
+///         relations hold no poses of its neighbours): scan_fit_closure_m,
+///         scan_fit_relations_m and confirmed_by_scans in by_relations, and
+///         false_by_relations_confirmed_by_scans (null without relations or
+///         scans) counting the false ones whose chained motion fits at
+///         least as well
 nlohmann::json judgeClosures(const std::vector<slam2d::LoopClosure2d>& closures,
                              const std::vector<slam2d::LoopClosure2d>& withdrawn, const JudgedRun& run,
                              std::vector<ClosureJudge> judges,

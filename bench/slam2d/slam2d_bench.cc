@@ -286,6 +286,7 @@ json revisitJson(const std::vector<Slam2dInput>& inputs, const std::vector<slam2
 constexpr const char* kRunClosureKeys[] = {"closures", "closures_judged", "false_closures", "false_against_submap",
                                            "false_across_ambiguity", "ambiguous_closures", "false_by_all_judges",
                                            "closures_judged_by_relations", "false_by_relations",
+                                           "false_by_relations_confirmed_by_scans",
                                            "false_confirmed_by_scans", "false_across_ambiguity_confirmed_by_scans",
                                            "false_away_from_judge_jumps",
                                            "false_across_ambiguity_away_from_judge_jumps", "false_credible"};
@@ -333,6 +334,8 @@ json repeatedRuns(const Slam2dBenchOptions& options, const Slam2dDataset& data, 
       if (!one["false_by_relations"].is_null())
         std::printf("; by the relations %zu of %zu false", one["false_by_relations"].get<size_t>(),
                     one["closures_judged_by_relations"].get<size_t>());
+      if (!one["false_by_relations_confirmed_by_scans"].is_null())
+        std::printf(" (the scans confirm %zu)", one["false_by_relations_confirmed_by_scans"].get<size_t>());
       if (!one["false_confirmed_by_scans"].is_null())
         std::printf("; the scans confirm %zu false (%zu with the ambiguous judged across their rival)",
                     one["false_confirmed_by_scans"].get<size_t>(),
@@ -374,6 +377,8 @@ int runSlam2dBench(const Slam2dBenchOptions& options) {
   source.relations_path = options.relations_path;
   source.reference_path = options.reference_path;
   source.stamps_path = options.stamps_path;
+  source.relations_scan_period_s = options.relations_scan_period_s;
+  source.relations_first_scan = options.relations_first_scan;
   source.odometry = parseOdometrySource(options.odometry);
   source.sim = options.sim;
   Slam2dDataset data = loadSlam2dDataset(options.source, source);
@@ -430,7 +435,12 @@ int runSlam2dBench(const Slam2dBenchOptions& options) {
             {"stamps_replaced", data.stamps_replaced},
             {"scans_numbered", data.scans_numbered},
             {"relations_file", options.relations_path},
-            {"relations_total", data.relations.size()},
+            {"relations_total", data.relations.size() + data.relations_dropped},
+            {"relations_placed_by_scan_period",
+             options.relations_scan_period_s > 0.0
+                 ? json{{"period_s", options.relations_scan_period_s}, {"first_scan", options.relations_first_scan},
+                        {"dropped", data.relations_dropped}}
+                 : json(nullptr)},
             {"relations_used", rel.relations_used},
             {"rel_trans_err_m", statsJson(rel.translation_m)},
             {"rel_rot_err_deg", statsJson(rel.rotation_rad, kDegPerRad)},
@@ -511,11 +521,16 @@ int runSlam2dBench(const Slam2dBenchOptions& options) {
         std::printf("    false by every check (across the rival, confirmed by the scans, away from the jumps): %zu\n",
                     j["false_credible"].get<size_t>());
     }
-    if (!lc_json["false_by_relations"].is_null())
+    if (!lc_json["false_by_relations"].is_null()) {
       std::printf("  %zu judged by the relations chained from match to query: %zu false, worst %.3f m\n",
                   lc_json["closures_judged_by_relations"].get<size_t>(), lc_json["false_by_relations"].get<size_t>(),
                   lc_json["worst_error_by_relations_m"].is_null() ? 0.0
                                                                   : lc_json["worst_error_by_relations_m"].get<double>());
+      if (!lc_json["false_by_relations_confirmed_by_scans"].is_null())
+        std::printf("    of them confirmed by the scans (the query fits the match's neighbours, drawn by the "
+                    "estimate, at least as well at the chained motion): %zu\n",
+                    lc_json["false_by_relations_confirmed_by_scans"].get<size_t>());
+    }
     if (judges.size() > 1) {
       std::printf("  false by every judge: %zu of the %zu closures all judged\n",
                   lc_json["false_by_all_judges"].get<size_t>(), lc_json["closures_judged_by_all"].get<size_t>());
@@ -582,7 +597,7 @@ int runSlam2dBench(const Slam2dBenchOptions& options) {
   std::printf("scans %zu (rejected %zu, non-finite %zu, outside map %zu)\n", data.inputs.size(), run.rejected,
               run.non_finite, run.outside_map);
   std::printf("relations used %zu of %zu: trans %.4f ± %.4f m, rot %.3f ± %.3f deg\n", rel.relations_used,
-              data.relations.size(), rel.translation_m.mean, rel.translation_m.std, rel.rotation_rad.mean * kDegPerRad,
+              data.relations.size() + data.relations_dropped, rel.translation_m.mean, rel.translation_m.std, rel.rotation_rad.mean * kDegPerRad,
               rel.rotation_rad.std * kDegPerRad);
   std::printf("  (the reference itself: trans %.4f ± %.4f m, rot %.3f ± %.3f deg)\n", ref_rel.translation_m.mean,
               ref_rel.translation_m.std, ref_rel.rotation_rad.mean * kDegPerRad, ref_rel.rotation_rad.std * kDegPerRad);

@@ -17,6 +17,8 @@ struct Slam2dBenchOptions {
   std::string relations_path;  ///< Kümmerle relation file, or empty
   std::string reference_path;  ///< CARMEN log of reference poses at the same stamps, or empty (see Slam2dSourceOptions)
   std::string stamps_path;     ///< CARMEN log to take the scans' stamps from, or empty (see Slam2dSourceOptions)
+  double relations_scan_period_s = 0.0;  ///< > 0: relations placed by counting scan periods (see Slam2dSourceOptions)
+  size_t relations_first_scan = 0;       ///< the scan of the relations' earliest stamp, with relations_scan_period_s
   std::string odometry = "auto";  ///< auto | logged | odom-increments | none (see OdometrySource)
   std::string json_out;        ///< empty: no file
   std::string poses_out;       ///< empty: no file; else one line "stamp_s x y theta" per scan (estimated laser pose)

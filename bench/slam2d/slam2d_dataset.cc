@@ -234,6 +234,41 @@ void useReferenceLog(Slam2dDataset& data, const std::string& path) {
 
 }  // namespace
 
+size_t placeRelationsByScanPeriod(std::vector<datasets::SlamRelation>& relations,
+                                  const std::vector<Slam2dInput>& inputs, double period_s, size_t first_scan) {
+  if (!(period_s > 0.0) || !std::isfinite(period_s))
+    throw std::invalid_argument("relations' scan period must be positive and finite");
+  std::vector<int64_t> stamps;
+  for (const datasets::SlamRelation& r : relations) stamps.insert(stamps.end(), {r.from_stamp_ns, r.to_stamp_ns});
+  std::sort(stamps.begin(), stamps.end());
+  stamps.erase(std::unique(stamps.begin(), stamps.end()), stamps.end());
+  // Each gap on its own: the period drifts a little over a long log, so one
+  // division from the first stamp would slip by whole scans where the gaps do not.
+  std::unordered_map<int64_t, size_t> scan_of;
+  size_t scan = first_scan;
+  for (size_t i = 0; i < stamps.size(); ++i) {
+    if (i > 0) {
+      const double periods = double(stamps[i] - stamps[i - 1]) * 1e-9 / period_s;
+      const double whole = std::round(periods);
+      if (whole < 1.0 || std::abs(periods - whole) > 0.3)
+        throw std::invalid_argument("relation stamps " + std::to_string(stamps[i - 1]) + " and " +
+                                    std::to_string(stamps[i]) + " ns lie " + std::to_string(periods) +
+                                    " scan periods apart, not a whole number: not the relations' scan period");
+      scan += static_cast<size_t>(whole);
+    }
+    scan_of.emplace(stamps[i], scan);
+  }
+  const size_t before = relations.size();
+  std::erase_if(relations, [&](datasets::SlamRelation& r) {
+    const size_t from = scan_of.at(r.from_stamp_ns), to = scan_of.at(r.to_stamp_ns);
+    if (from >= inputs.size() || to >= inputs.size()) return true;
+    r.from_stamp_ns = inputs[from].scan.stamp_ns;
+    r.to_stamp_ns = inputs[to].scan.stamp_ns;
+    return false;
+  });
+  return before - relations.size();
+}
+
 OdometrySource parseOdometrySource(const std::string& name) {
   if (name == "auto") return OdometrySource::kAuto;
   if (name == "logged") return OdometrySource::kLogged;
@@ -260,7 +295,12 @@ Slam2dDataset loadSlam2dDataset(const std::string& source, const Slam2dSourceOpt
   if (!options.reference_path.empty()) useReferenceLog(data, options.reference_path);
   // Only when no other log is to be matched by stamp: its scans would not carry the numbers.
   if (options.stamps_path.empty() && options.reference_path.empty()) numberScansWithoutStamps(data);
-  if (!options.relations_path.empty()) data.relations = datasets::readSlamRelations(options.relations_path);
+  if (!options.relations_path.empty()) {
+    data.relations = datasets::readSlamRelations(options.relations_path);
+    if (options.relations_scan_period_s > 0.0)
+      data.relations_dropped = placeRelationsByScanPeriod(data.relations, data.inputs, options.relations_scan_period_s,
+                                                          options.relations_first_scan);
+  }
   return data;
 }
 

@@ -56,6 +56,7 @@ struct Slam2dDataset {
   std::string reference_kind;  ///< e.g. "corrected poses of the log", "raw odometry of the log", "simulation truth"
   std::string odometry_kind;   ///< what inputs[].odometry holds
   std::vector<datasets::SlamRelation> relations;  ///< empty when none
+  size_t relations_dropped = 0;  ///< placed by scan period past the log's last scan (see Slam2dSourceOptions)
   bool simulated = false;
   std::vector<SimReturn> sim_returns;  ///< simulated runs only: every return that hit a surface
   /// Seconds the data spans (scan stamps, max − min), absent when the stamps
@@ -83,9 +84,31 @@ struct Slam2dSourceOptions {
   /// stamp. Corrected logs keep only some scans of a raw log and rewrote
   /// their stamps; this finds them in the raw log. Empty: none.
   std::string stamps_path;
+  /// Relations of a log whose stamps were rewritten cannot be placed by stamp
+  /// (raw mit-killian: its scans are stamped 0.9 s apart, the relations' scans
+  /// 0.44 s). With a period > 0 they are placed by counting instead: the
+  /// relations' distinct stamps, sorted, are numbered by their gaps rounded to
+  /// whole periods, the first at scan relations_first_scan, and each stamp
+  /// becomes its scan's. This holds only where the log kept every scan of the
+  /// relations' run, in order; BENCHMARKS.md §4 shows how mit-killian's first
+  /// scan was found. 0: by stamp.
+  double relations_scan_period_s = 0.0;
+  size_t relations_first_scan = 0;
   OdometrySource odometry = OdometrySource::kAuto;
   Slam2dSimOptions sim;
 };
+
+/// Places relations on scans by counting scan periods (see
+/// Slam2dSourceOptions::relations_scan_period_s); relations that would fall
+/// past the last scan are dropped.
+/// @param period_s    seconds between the scans of the relations' run
+/// @param first_scan  index into `inputs` of the relations' earliest stamp
+/// @return relations dropped
+/// @throws std::invalid_argument for a period that is not positive and finite,
+///         or a gap between two distinct relation stamps that is not within
+///         0.3 of a whole number (≥ 1) of periods: the period is wrong there
+size_t placeRelationsByScanPeriod(std::vector<datasets::SlamRelation>& relations,
+                                  const std::vector<Slam2dInput>& inputs, double period_s, size_t first_scan);
 
 /// Loads SOURCE: a CARMEN log (plain, .gz, .bz2) or `sim:building` (a
 /// procedural one-storey building of clients/sim, a 2D laser preset driven

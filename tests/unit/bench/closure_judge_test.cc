@@ -397,6 +397,50 @@ TEST(ClosureJudge, TheRelationsJudgeTheClosuresTheyChainTo) {
   EXPECT_EQ(r["false_by_relations"], 2);
 }
 
+// A long chain of relations gathers their errors: a false verdict by the
+// relations is checked against the scans as a judge's is, the match's local
+// map drawn by the estimate.
+TEST(ClosureJudge, TheScansShowWhetherAFalseVerdictIsTheRelationsError) {
+  std::mt19937 random(11);
+  std::uniform_real_distribution<double> along(-3.0, 8.0), across(-4.0, 4.0);
+  std::vector<Eigen::Vector2d> landmarks;
+  for (int i = 0; i < 300; ++i) landmarks.emplace_back(along(random), across(random));
+  JudgedRun run = outAndBack(40);
+  for (const Pose2& laser : run.laser_poses) {
+    std::vector<Eigen::Vector2d> seen;
+    for (const Eigen::Vector2d& l : landmarks) seen.push_back(laser.inverse() * l);
+    run.scan_points.push_back(std::move(seen));
+  }
+  const auto chainOfSteps = [&](const Pose2& error_at_turn) {
+    std::vector<datasets::SlamRelation> relations;
+    for (size_t i = 0; i + 1 < 40; ++i)
+      relations.push_back({run.stamps_ns[i], run.stamps_ns[i + 1],
+                           between(run.laser_poses[i], run.laser_poses[i + 1]) * (i == 19 ? error_at_turn : Pose2{}), 0});
+    return relations;
+  };
+  // A true closure, and relations off by 0.4 m at the turn their chain passes.
+  const std::vector<slam2d::LoopClosure2d> true_closure = {closureOf(run, 39, 0, {})};
+  nlohmann::json r = judgeClosures(true_closure, {}, run, {}, chainOfSteps({0.0, 0.4, 0.0}));
+  EXPECT_EQ(r["false_by_relations"], 1);
+  EXPECT_EQ(r["false_by_relations_confirmed_by_scans"], 0);
+  const nlohmann::json& verdict = r["list"][0]["by_relations"];
+  EXPECT_FALSE(verdict["confirmed_by_scans"].get<bool>());
+  EXPECT_LT(verdict["scan_fit_closure_m"].get<double>(), 1e-9);
+  EXPECT_GT(verdict["scan_fit_relations_m"].get<double>(), 0.1);
+  // A closure truly 0.4 m off, exact relations: the scans confirm the verdict.
+  const std::vector<slam2d::LoopClosure2d> false_closure = {closureOf(run, 38, 1, {0.4, 0.0, 0.0})};
+  r = judgeClosures(false_closure, {}, run, {}, chainOfSteps({}));
+  EXPECT_EQ(r["false_by_relations"], 1);
+  EXPECT_EQ(r["false_by_relations_confirmed_by_scans"], 1);
+  EXPECT_TRUE(r["list"][0]["by_relations"]["confirmed_by_scans"].get<bool>());
+  // Without scans, no check.
+  run.scan_points.clear();
+  r = judgeClosures(false_closure, {}, run, {}, chainOfSteps({}));
+  EXPECT_EQ(r["false_by_relations"], 1);
+  EXPECT_TRUE(r["false_by_relations_confirmed_by_scans"].is_null());
+  EXPECT_FALSE(r["list"][0]["by_relations"].contains("confirmed_by_scans"));
+}
+
 TEST(ClosureJudge, ScansSharingAStampAreNotJudged) {
   TenScanRun run;
   run.judged.stamps_ns[2] = run.judged.stamps_ns[3];  // a log with rounded stamps

@@ -283,6 +283,42 @@ TEST(Slam2dBench, ClosureJudgesFindTheirScansWhereTheRunsStampsCameFrom) {
   fs::remove(judge_log);
 }
 
+// A log whose stamps were rewritten (scans 0.9 s apart) takes relations whose
+// scans were 0.44 s apart by counting: gaps rounded to whole periods (jitter
+// of a few hundredths is the real logs'), the earliest at the given scan.
+TEST(Slam2dBench, RelationsArePlacedByCountingScanPeriods) {
+  const fs::path log = tempPath("rewritten.log"), rel = tempPath("rewritten.relations");
+  std::ofstream(log) << "FLASER 3 1 2 3 0 0 0 0 0 0 50.0 h 0\nFLASER 3 1 2 3 0 0 0 0 0 0 50.9 h 0\n"
+                        "FLASER 3 1 2 3 0 0 0 0 0 0 51.8 h 0\nFLASER 3 1 2 3 0 0 0 0 0 0 52.7 h 0\n"
+                        "FLASER 3 1 2 3 0 0 0 0 0 0 53.6 h 0\n";
+  std::ofstream(rel) << "1000.000 1000.880 0.9 0 0 0 0 0\n"   // 2 periods
+                        "1000.880 1001.319 0.4 0 0 0 0 0.1\n"  // 1 period, 0.001 s short
+                        "1001.319 1002.650 1.2 0 0 0 0 0\n";   // 3 more: past the last scan
+  Slam2dSourceOptions o;
+  o.relations_path = rel.string();
+  const Slam2dDataset by_stamp = loadSlam2dDataset(log.string(), o);
+  ASSERT_EQ(by_stamp.relations.size(), 3u);
+  EXPECT_EQ(by_stamp.relations[0].from_stamp_ns, 1'000'000'000'000) << "without a period the stamps stay";
+  o.relations_scan_period_s = 0.44;
+  o.relations_first_scan = 1;
+  const Slam2dDataset counted = loadSlam2dDataset(log.string(), o);
+  EXPECT_EQ(counted.relations_dropped, 1u);
+  ASSERT_EQ(counted.relations.size(), 2u);
+  EXPECT_EQ(counted.relations[0].from_stamp_ns, 50'900'000'000);  // scan 1
+  EXPECT_EQ(counted.relations[0].to_stamp_ns, 52'700'000'000);    // scan 3
+  EXPECT_EQ(counted.relations[1].from_stamp_ns, 52'700'000'000);
+  EXPECT_EQ(counted.relations[1].to_stamp_ns, 53'600'000'000);    // scan 4
+  EXPECT_DOUBLE_EQ(counted.relations[1].motion.theta_rad, 0.1);
+  // A gap half a period off whole: the period is wrong, say so.
+  std::vector<datasets::SlamRelation> off = by_stamp.relations;
+  off[1].to_stamp_ns = off[1].from_stamp_ns + 660'000'000;
+  off[2].from_stamp_ns = off[1].to_stamp_ns;
+  EXPECT_THROW(placeRelationsByScanPeriod(off, counted.inputs, 0.44, 0), std::invalid_argument);
+  EXPECT_THROW(placeRelationsByScanPeriod(off, counted.inputs, 0.0, 0), std::invalid_argument);
+  fs::remove(log);
+  fs::remove(rel);
+}
+
 TEST(Slam2dBench, BadSourcesAreClearErrors) {
   EXPECT_THROW(loadSlam2dDataset("sim:nowhere", {}), std::runtime_error);
   EXPECT_THROW(loadSlam2dDataset("/nonexistent/log.gz", {}), std::runtime_error);
