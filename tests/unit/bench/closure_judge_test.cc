@@ -118,6 +118,21 @@ JudgedRun outAndBack(int scans) {
   return run;
 }
 
+/// outAndBack(40) whose scans each see the same 300 scattered landmarks (drawn with `seed`).
+JudgedRun outAndBackAmongLandmarks(unsigned seed) {
+  std::mt19937 random(seed);
+  std::uniform_real_distribution<double> along(-3.0, 8.0), across(-4.0, 4.0);
+  std::vector<Eigen::Vector2d> landmarks;
+  for (int i = 0; i < 300; ++i) landmarks.emplace_back(along(random), across(random));
+  JudgedRun run = outAndBack(40);
+  for (const Pose2& laser : run.laser_poses) {
+    std::vector<Eigen::Vector2d> seen;
+    for (const Eigen::Vector2d& l : landmarks) seen.push_back(laser.inverse() * l);
+    run.scan_points.push_back(std::move(seen));
+  }
+  return run;
+}
+
 /// A closure of `run` from `match` to `query` at the estimate's relative pose, then `error` on top.
 slam2d::LoopClosure2d closureOf(const JudgedRun& run, size_t query, size_t match, const Pose2& error) {
   slam2d::LoopClosure2d c;
@@ -132,17 +147,7 @@ slam2d::LoopClosure2d closureOf(const JudgedRun& run, size_t query, size_t match
 // corrected log off along a corridor), the closure's pose fits better and the
 // verdict is not confirmed; a closure truly off is.
 TEST(ClosureJudge, TheScansShowWhetherAFalseVerdictIsTheJudgesError) {
-  // 40 scans out and back; each sees the same scattered landmarks.
-  std::mt19937 random(7);
-  std::uniform_real_distribution<double> along(-3.0, 8.0), across(-4.0, 4.0);
-  std::vector<Eigen::Vector2d> landmarks;
-  for (int i = 0; i < 300; ++i) landmarks.emplace_back(along(random), across(random));
-  JudgedRun run = outAndBack(40);
-  for (const Pose2& laser : run.laser_poses) {
-    std::vector<Eigen::Vector2d> seen;
-    for (const Eigen::Vector2d& l : landmarks) seen.push_back(laser.inverse() * l);
-    run.scan_points.push_back(std::move(seen));
-  }
+  JudgedRun run = outAndBackAmongLandmarks(7);
   ClosureJudge judge{"off at scan 39", std::vector<std::optional<Pose2>>(run.laser_poses.begin(), run.laser_poses.end()), {}};
   judge.reference[39] = *judge.reference[39] * Pose2{0.4, 0.0, 0.0};
   const std::vector<slam2d::LoopClosure2d> closures = {closureOf(run, 39, 0, {}), closureOf(run, 38, 1, {0.4, 0.0, 0.0})};
@@ -401,16 +406,7 @@ TEST(ClosureJudge, TheRelationsJudgeTheClosuresTheyChainTo) {
 // relations is checked against the scans as a judge's is, the match's local
 // map drawn by the estimate.
 TEST(ClosureJudge, TheScansShowWhetherAFalseVerdictIsTheRelationsError) {
-  std::mt19937 random(11);
-  std::uniform_real_distribution<double> along(-3.0, 8.0), across(-4.0, 4.0);
-  std::vector<Eigen::Vector2d> landmarks;
-  for (int i = 0; i < 300; ++i) landmarks.emplace_back(along(random), across(random));
-  JudgedRun run = outAndBack(40);
-  for (const Pose2& laser : run.laser_poses) {
-    std::vector<Eigen::Vector2d> seen;
-    for (const Eigen::Vector2d& l : landmarks) seen.push_back(laser.inverse() * l);
-    run.scan_points.push_back(std::move(seen));
-  }
+  JudgedRun run = outAndBackAmongLandmarks(11);
   const auto chainOfSteps = [&](const Pose2& error_at_turn) {
     std::vector<datasets::SlamRelation> relations;
     for (size_t i = 0; i + 1 < 40; ++i)
