@@ -168,6 +168,22 @@ std::vector<Eigen::Vector2d> judgeLocalMap(size_t match, const Pose2& judge_matc
   return map;
 }
 
+/// The query's scan fitted to the local map of `match` drawn by `judge`, at
+/// the closure's relative pose and at the one a false verdict holds true.
+struct ScanCheck {
+  double closure_fit_m;
+  double verdict_fit_m;
+  bool confirmed;  ///< the verdict's pose fits no worse than the closure's
+};
+
+ScanCheck checkByScans(size_t match, const Pose2& judge_match, size_t query, const JudgedRun& run,
+                       const ClosureJudge& judge, const Pose2& measured, const Pose2& verdict_motion) {
+  const std::vector<Eigen::Vector2d> local_map = judgeLocalMap(match, judge_match, query, run, judge);
+  const double closure_fit_m = scanFit_m(run.scan_points[query], measured, local_map);
+  const double verdict_fit_m = scanFit_m(run.scan_points[query], verdict_motion, local_map);
+  return {closure_fit_m, verdict_fit_m, verdict_fit_m <= closure_fit_m};
+}
+
 }  // namespace
 
 std::optional<double> judgeJump_m(const ClosureJudge& judge, const JudgedRun& run, size_t scan) {
@@ -267,13 +283,11 @@ json judgeClosures(const std::vector<slam2d::LoopClosure2d>& closures,
       wrong_across[j] += wrong_across_here;
       bool confirmed = false;
       if (scan_check && is_wrong) {  // wrong across a rival is wrong in full too
-        const std::vector<Eigen::Vector2d> local_map = judgeLocalMap(*match, *rm, *query, run, judges[j]);
-        const double closure_fit_m = scanFit_m(run.scan_points[*query], measured, local_map);
-        const double judge_fit_m = scanFit_m(run.scan_points[*query], between(*rm, *rq), local_map);
-        confirmed = judge_fit_m <= closure_fit_m;
+        const ScanCheck fit = checkByScans(*match, *rm, *query, run, judges[j], measured, between(*rm, *rq));
+        confirmed = fit.confirmed;
         wrong_confirmed[j] += is_wrong && confirmed;
         wrong_across_confirmed[j] += wrong_across_here && confirmed;
-        verdict.update({{"scan_fit_closure_m", closure_fit_m}, {"scan_fit_judge_m", judge_fit_m},
+        verdict.update({{"scan_fit_closure_m", fit.closure_fit_m}, {"scan_fit_judge_m", fit.verdict_fit_m},
                         {"confirmed_by_scans", confirmed}});
       }
       if (jump_check && is_wrong) {
@@ -314,15 +328,12 @@ json judgeClosures(const std::vector<slam2d::LoopClosure2d>& closures,
                               {"bridge_scans", truth->bridge_scans},
                               {"bridge_m", truth->bridge_m}};
       if (scan_check && is_wrong) {
-        const std::vector<Eigen::Vector2d> local_map =
-            judgeLocalMap(*match, run.laser_poses[*match], *query, run, drawn_by_estimate);
-        const double closure_fit_m = scanFit_m(run.scan_points[*query], measured, local_map);
-        const double chain_fit_m = scanFit_m(run.scan_points[*query], truth->motion, local_map);
-        const bool confirmed = chain_fit_m <= closure_fit_m;
-        wrong_by_relations_confirmed += confirmed;
-        item["by_relations"].update({{"scan_fit_closure_m", closure_fit_m},
-                                     {"scan_fit_relations_m", chain_fit_m},
-                                     {"confirmed_by_scans", confirmed}});
+        const ScanCheck fit = checkByScans(*match, run.laser_poses[*match], *query, run, drawn_by_estimate,
+                                           measured, truth->motion);
+        wrong_by_relations_confirmed += fit.confirmed;
+        item["by_relations"].update({{"scan_fit_closure_m", fit.closure_fit_m},
+                                     {"scan_fit_relations_m", fit.verdict_fit_m},
+                                     {"confirmed_by_scans", fit.confirmed}});
       }
     }
     if (judges.size() > 1) {

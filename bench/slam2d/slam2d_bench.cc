@@ -597,8 +597,8 @@ int runSlam2dBench(const Slam2dBenchOptions& options) {
   std::printf("scans %zu (rejected %zu, non-finite %zu, outside map %zu)\n", data.inputs.size(), run.rejected,
               run.non_finite, run.outside_map);
   std::printf("relations used %zu of %zu: trans %.4f ± %.4f m, rot %.3f ± %.3f deg\n", rel.relations_used,
-              data.relations.size() + data.relations_dropped, rel.translation_m.mean, rel.translation_m.std, rel.rotation_rad.mean * kDegPerRad,
-              rel.rotation_rad.std * kDegPerRad);
+              data.relations.size() + data.relations_dropped, rel.translation_m.mean, rel.translation_m.std,
+              rel.rotation_rad.mean * kDegPerRad, rel.rotation_rad.std * kDegPerRad);
   std::printf("  (the reference itself: trans %.4f ± %.4f m, rot %.3f ± %.3f deg)\n", ref_rel.translation_m.mean,
               ref_rel.translation_m.std, ref_rel.rotation_rad.mean * kDegPerRad, ref_rel.rotation_rad.std * kDegPerRad);
   std::printf("ATE vs %s: %.4f m; RPE over %.1f m: %.4f m (%zu pairs)\n", data.reference_kind.c_str(), ate.rmse,
