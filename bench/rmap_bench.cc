@@ -191,6 +191,8 @@ int main(int argc, char** argv) {
   d->add_option("--sequential-sigma-rad-per-m", slam2d.slam.loop_closure.sequential_sigma_rad_per_m,
                 "pose graph: growth of a consecutive-keyframe edge's heading sigma with its step (rad per m)");
   d->add_option("--loop-min-score", slam2d.slam.loop_closure.min_score, "correlative score a loop closure needs");
+  d->add_option("--loop-max-candidates", slam2d.slam.loop_closure.max_candidates,
+                "submaps a searching keyframe is matched against, nearest first");
   d->add_option("--loop-exclude-recent-submaps", slam2d.slam.loop_closure.exclude_recent_submaps,
                 "a trajectory's newest finished submaps it is not matched against");
   d->add_option("--max-loop-window-m", slam2d.slam.loop_closure.max_window_m,
