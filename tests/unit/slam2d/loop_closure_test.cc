@@ -26,9 +26,14 @@ class SimulatedLoop : public ::testing::Test {
     delete tour_;
   }
 
+  /// The first pass of outAndAgain(): the first 120 poses of the tour.
+  static std::vector<Pose2> outAndAgainFirstPass() {
+    return testing::smoothTurns(std::vector<Pose2>(tour_->begin(), tour_->begin() + 120), 0.1);
+  }
+
   /// The first 120 poses of the tour, then its first 60 again: the second pass revisits the first.
   static std::vector<Pose2> outAndAgain() {
-    std::vector<Pose2> path = testing::smoothTurns(std::vector<Pose2>(tour_->begin(), tour_->begin() + 120), 0.1);
+    std::vector<Pose2> path = outAndAgainFirstPass();
     const std::vector<Pose2> again = testing::smoothTurns(std::vector<Pose2>(tour_->begin(), tour_->begin() + 60), 0.1);
     path.insert(path.end(), again.begin(), again.end());
     return path;
@@ -325,7 +330,7 @@ CloserRun closeAlong(const sim::VoxelWorld& world, const LoopClosureOptions& opt
 // main corridor twice with three: docs/BENCHMARKS.md §4).
 TEST_F(SimulatedLoop, ADriftedReturnReachesTheSubmapOfThePlace) {
   const std::vector<Pose2> truth = outAndAgain();
-  const size_t first_pass = testing::smoothTurns(std::vector<Pose2>(tour_->begin(), tour_->begin() + 120), 0.1).size();
+  const size_t first_pass = outAndAgainFirstPass().size();
   constexpr float kRange_m = 6.0f;
   for (const Pose2& drift : {Pose2{-5.0, 3.0, 0.0}, Pose2{-5.0, 5.0, 0.0}}) {
     SCOPED_TRACE(::testing::Message() << "drift " << drift.x_m << ", " << drift.y_m);
