@@ -26,6 +26,22 @@ struct ScanMatcherOptions {
   double damping = 1e-2;              ///< Levenberg term, relative to the Hessian's trace
   double max_step_cells = 1.5;        ///< translation bound of one step, in cells of the level
   double max_step_rad = 0.15;         ///< rotation bound of one step (rad)
+  /// On the coarser levels (with a prior only), more prior along the
+  /// translation direction the data leaves nearly flat. Those levels pull the
+  /// guess into the finest level's reach; but along a direction the data
+  /// hardly constrains (a corridor's axis, a lone wall) a few endpoints past
+  /// the map's newest edge, where the map falls off to unknown, pull the pose
+  /// back 3–4 cm a scan, and the finest level, flat there too, keeps it: a
+  /// simulated wall seen to 5 m left the estimate 2.7–3 m behind. Where the
+  /// weaker eigenvalue of the level's translation Hessian is below
+  /// coarse_flat_ratio of the stronger, the prior gains
+  /// coarse_flat_information_xy along its eigenvector (0.3–0.9 of it in open
+  /// rooms, 0.04–0.1 along that wall). Directions the data constrains move as
+  /// before, so a slip the odometry missed is still caught; a fixed floor on
+  /// x and y was not (docs/BENCHMARKS.md §4, *The coarse levels' pull along a
+  /// flat direction*).
+  double coarse_flat_information_xy = 10.0;  ///< 1/m², ≥ 0 (0: off)
+  double coarse_flat_ratio = 0.1;            ///< in [0, 1]
   double converged_m = 1e-4;          ///< stop a level when a step is below this translation (m) ...
   double converged_rad = 1e-4;        ///< ... and this rotation (rad)
   double reflectivity_weight = 0.0;   ///< per-point weight of the reflectivity residual (0 = off)
