@@ -35,8 +35,9 @@ struct ScanMatcherOptions {
   /// simulated wall seen to 5 m left the estimate 2.7–3 m behind. Where the
   /// weaker eigenvalue of the level's translation Hessian is below
   /// coarse_flat_ratio of the stronger, the prior gains
-  /// coarse_flat_information_xy along its eigenvector (0.3–0.9 of it in open
-  /// rooms, 0.04–0.1 along that wall). Directions the data constrains move as
+  /// coarse_flat_information_xy along its eigenvector (the ratio is mostly
+  /// 0.15–0.9 in the simulated building, 0.02–0.1 along that wall; 0.25 or
+  /// more through a 25 cm slip). Directions the data constrains move as
   /// before, so a slip the odometry missed is still caught; a fixed floor on
   /// x and y was not (docs/BENCHMARKS.md §4, *The coarse levels' pull along a
   /// flat direction*).
