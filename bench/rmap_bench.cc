@@ -132,10 +132,10 @@ int main(int argc, char** argv) {
   d->add_option("--match-point-spacing", slam2d.slam.match_point_spacing_m, "spacing of the matched endpoints, metres");
   d->add_option("--coarse-iterations", slam2d.slam.matcher.coarse_iterations, "Gauss-Newton iterations per coarse level");
   d->add_option("--fine-iterations", slam2d.slam.matcher.fine_iterations, "Gauss-Newton iterations on the finest level");
-  d->add_option("--coarse-flat-information-xy", slam2d.slam.matcher.coarse_flat_information_xy,
-                "dense trajectories: odometry prior along the coarse levels' nearly flat direction, 1/m^2 (0: off)");
-  d->add_option("--coarse-flat-ratio", slam2d.slam.matcher.coarse_flat_ratio,
-                "eigenvalue ratio below which a coarse level's translation direction counts as flat");
+  d->add_option("--flat-information-cells", slam2d.slam.matcher.flat_information_cells,
+                "dense trajectories: odometry prior along a level's nearly flat direction, 1/cell^2 (0: off)");
+  d->add_option("--flat-ratio", slam2d.slam.matcher.flat_ratio,
+                "eigenvalue ratio below which a level's translation direction counts as flat");
   d->add_option("--matcher-damping", slam2d.slam.matcher.damping, "Levenberg damping of the scan matcher, relative to the Hessian trace");
   d->add_option("--value-floor", slam2d.slam.occupancy.value_floor_probability,
                 "occupancy probability the scan matcher reads as empty (0: it reads the probability itself)");

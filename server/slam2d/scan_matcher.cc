@@ -93,15 +93,18 @@ Pose2 correlativeSearch(const GridMap2d& map, std::span<const MatchPoint> points
 
 /// Adds to the normal equations the prior along the weaker translation
 /// eigenvector of those equations so far: the data and the fixed prior (see
-/// ScanMatcherOptions::coarse_flat_information_xy).
-/// @param offset_m  pose translation minus the prior's (m)
-void addFlatDirectionPrior(Normal& n, const Eigen::Vector2d& offset_m, const ScanMatcherOptions& options) {
+/// ScanMatcherOptions::flat_information_cells).
+/// @param offset_m      pose translation minus the prior's (m)
+/// @param resolution_m  cell edge of the level the equations are for
+void addFlatDirectionPrior(Normal& n, const Eigen::Vector2d& offset_m, double resolution_m,
+                           const ScanMatcherOptions& options) {
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eigen(n.h.topLeftCorner<2, 2>());
   const double strong = eigen.eigenvalues()(1);
   if (!(strong > 0.0)) return;
-  if (eigen.eigenvalues()(0) >= options.coarse_flat_ratio * strong) return;
+  if (eigen.eigenvalues()(0) >= options.flat_ratio * strong) return;
   const Eigen::Vector2d flat = eigen.eigenvectors().col(0);
-  const Eigen::Matrix2d information = options.coarse_flat_information_xy * flat * flat.transpose();
+  const Eigen::Matrix2d information =
+      options.flat_information_cells / (resolution_m * resolution_m) * flat * flat.transpose();
   n.h.topLeftCorner<2, 2>() += information;
   n.g.head<2>() -= information * offset_m;
 }
@@ -127,7 +130,8 @@ MatchResult matchScan(const GridMap2d& map, std::span<const MatchPoint> points, 
                                 normalizeAngle(xi.theta_rad - prior->pose.theta_rad));
         n.h.diagonal() += prior->information;
         n.g -= prior->information.cwiseProduct(e);
-        if (level > 0 && options.coarse_flat_information_xy > 0.0) addFlatDirectionPrior(n, e.head<2>(), options);
+        if (options.flat_information_cells > 0.0)
+          addFlatDirectionPrior(n, e.head<2>(), map.level(level).resolution_m(), options);
       }
       // Levenberg damping: a floor under every direction, so a flat one
       // (corridor axis) gets a small step rather than an arbitrary one.

@@ -26,23 +26,24 @@ struct ScanMatcherOptions {
   double damping = 1e-2;              ///< Levenberg term, relative to the Hessian's trace
   double max_step_cells = 1.5;        ///< translation bound of one step, in cells of the level
   double max_step_rad = 0.15;         ///< rotation bound of one step (rad)
-  /// On the coarser levels (with a prior only), more prior along the
-  /// translation direction the data leaves nearly flat. Those levels pull the
-  /// guess into the finest level's reach; but along a direction the data
-  /// hardly constrains (a corridor's axis, a lone wall) a few endpoints past
-  /// the map's newest edge, where the map falls off to unknown, pull the pose
-  /// back 3–4 cm a scan, and the finest level, flat there too, keeps it: a
-  /// simulated wall seen to 5 m left the estimate 2.7–3 m behind. Where the
-  /// weaker eigenvalue of the level's translation Hessian is below
-  /// coarse_flat_ratio of the stronger, the prior gains
-  /// coarse_flat_information_xy along its eigenvector (the ratio is mostly
-  /// 0.15–0.9 in the simulated building, 0.02–0.1 along that wall; 0.25 or
-  /// more through a 25 cm slip). Directions the data constrains move as
-  /// before, so a slip the odometry missed is still caught; a fixed floor on
-  /// x and y was not (docs/BENCHMARKS.md §4, *The coarse levels' pull along a
-  /// flat direction*).
-  double coarse_flat_information_xy = 10.0;  ///< 1/m², ≥ 0 (0: off)
-  double coarse_flat_ratio = 0.1;            ///< in [0, 1]
+  /// With a prior only: more prior along the translation direction the data
+  /// leaves nearly flat. Along such a direction (a corridor's axis, a lone
+  /// wall) a few endpoints past the map's newest edge, where the map falls
+  /// off to unknown, pull the pose back 3–4 cm a scan on the coarse levels,
+  /// and nothing else holds it: a simulated wall seen to 5 m left the
+  /// estimate 2.7–3 m behind. Where the weaker eigenvalue of a level's
+  /// translation Hessian is below flat_ratio of the stronger, the prior gains
+  /// flat_information_cells / d² along its eigenvector, d the level's cell
+  /// edge (the data's curvature grows as 1/d²): 10/m² at 0.2 m, 160/m² at
+  /// 0.05 m. On the coarse levels alone the wall was left 0.37–0.53 m behind;
+  /// on every level 0.13–0.23 m. (The ratio is mostly 0.15–0.9 in the
+  /// simulated building, 0.02–0.1 along that wall; 0.25 or more through a
+  /// 25 cm slip.) Directions the data constrains move as before, so a slip
+  /// the odometry missed is still caught; a fixed floor on x and y was not
+  /// (docs/BENCHMARKS.md §4, *The coarse levels' pull along a flat
+  /// direction* and *The flat-direction prior on every level*).
+  double flat_information_cells = 0.4;  ///< 1/cell², ≥ 0 (0: off)
+  double flat_ratio = 0.1;              ///< in [0, 1]
   double converged_m = 1e-4;          ///< stop a level when a step is below this translation (m) ...
   double converged_rad = 1e-4;        ///< ... and this rotation (rad)
   double reflectivity_weight = 0.0;   ///< per-point weight of the reflectivity residual (0 = off)

@@ -101,8 +101,8 @@ void Slam2dOptions::validate() const {
   require(matcher.coarse_iterations >= 0 && matcher.fine_iterations >= 0, "matcher iterations must be ≥ 0");
   require(matcher.damping >= 0.0 && matcher.max_step_cells > 0.0 && matcher.max_step_rad > 0.0,
           "matcher damping ≥ 0 and step bounds > 0");
-  require(in(matcher.coarse_flat_information_xy, 1e6) && in(matcher.coarse_flat_ratio, 1.0),
-          "matcher.coarse_flat_information_xy must be in [0, 1e6] and matcher.coarse_flat_ratio in [0, 1]");
+  require(in(matcher.flat_information_cells, 1e4) && in(matcher.flat_ratio, 1.0),
+          "matcher.flat_information_cells must be in [0, 1e4] and matcher.flat_ratio in [0, 1]");
   incidence.validate();  // else a bad option would only throw at the first scan with intensities
   loop_closure.validate();
 }
@@ -257,9 +257,10 @@ Pose2 Slam2d::addScan(const std::string& trajectory, const LaserScan& scan, cons
                                                                    options_.odometry_information_theta)};
     // A sparse trajectory's prior already follows how well its odometry
     // agrees, and its steps (≈ 1 m) need the coarse levels' reach: the
-    // flat-direction prior is for dense ones (docs/BENCHMARKS.md §4).
+    // flat-direction prior is for dense ones (on the sparse corrected logs it
+    // gained nothing and cost edmonton; docs/BENCHMARKS.md §4).
     ScanMatcherOptions unsearched = options_.matcher;
-    if (sparse_before) unsearched.coarse_flat_information_xy = 0.0;
+    if (sparse_before) unsearched.flat_information_cells = 0.0;
     ScanMatcherOptions matcher = unsearched;
     const Pose2 step = odometry_step ? between(*track.odometry, *odometry) : Pose2{};
     const bool search = !odometry_step || step.translation().norm() > options_.search_odometry_step_m ||

@@ -126,18 +126,17 @@ TEST(ScanMatcher, ATranslationWeightKeepsTheSearchFromSlidingAlongACorridor) {
   EXPECT_NEAR(matchScan(map, scan, guess, std::nullopt, options).pose.x_m, 0.0, 0.05);
 }
 
-TEST(ScanMatcher, ThePriorHoldsTheCoarseLevelsAlongACorridorPastTheMapsEnd) {
+TEST(ScanMatcher, ThePriorHoldsAlongACorridorPastTheMapsEnd) {
   // The map's walls end at x = 4 m; the scan, taken at x = 0 where the
-  // odometry's prior says, sees them on to 4.3 m. On the coarse levels the
-  // endpoints past the edge pull the scan back along the axis, which the
-  // data leaves flat, and the finest level (flat there too) keeps it.
+  // odometry's prior says, sees them on to 4.3 m. The endpoints past the
+  // edge pull the scan back along the axis, which the data leaves flat.
   const GridMap2d map = corridorMap(-8.0, 4.0);
   const std::vector<MatchPoint> scan = corridorWalls(-2.0, 4.3, 1.025, -1.025);
   const Pose2 truth{0.0, 0.0, 0.0};
   const PosePrior prior{truth, {0.05, 0.05, 0.0}};  // Slam2dOptions' fixed odometry information
   ScanMatcherOptions options;
   const MatchResult held = matchScan(map, scan, truth, prior, options);
-  options.coarse_flat_information_xy = 0.0;
+  options.flat_information_cells = 0.0;
   const MatchResult slid = matchScan(map, scan, truth, prior, options);
   EXPECT_LT(slid.pose.x_m, -0.2) << "without the flat-direction prior the scan slides back";
   EXPECT_NEAR(held.pose.x_m, truth.x_m, 0.05);
